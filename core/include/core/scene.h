@@ -1,0 +1,132 @@
+// The Scene: the editable document that says what a motion must do and how. Plain values only
+// (no Qt, no solver types) so the editor, the command-line tool and the tests share it.
+//
+// A scene holds characters (a tree of bodies with joints, geometry and mass), the time range,
+// gravity, the ground plane (y = height, y is up), the transcription settings, the constraint
+// terms (pins, keyframes, rests, contacts, clearances) and the weighted objective terms.
+// Joint and torque limits live on the joints. Ids are stable strings.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace spacetime {
+
+enum class RootKind {
+  Fixed,          // bolted to the world
+  Planar,         // x, y translation and rotation about z (dofs <root>_x, <root>_y, <root>_rz)
+  Floating3D,     // x, y, z then yaw (y), pitch (z), roll (x) Euler angles
+  Translation3D,  // x, y, z only: a point mass (the seed's particle)
+};
+
+enum class GeometryKind { None, Box, Sphere, Capsule, Cylinder };
+
+struct Geometry {
+  GeometryKind kind = GeometryKind::None;
+  // Box: full extents (x, y, z). Sphere: radius in [0]. Capsule/cylinder: radius in [0],
+  // length (of the cylindrical part) in [1], along `axis`.
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  int axis = 1;  // 0 = x, 1 = y, 2 = z (capsule and cylinder)
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // centre in the body frame
+};
+
+enum class JointKind { Revolute, Prismatic, Helical, Fixed };
+
+struct JointSpec {
+  std::string id;  // the degree of freedom's name
+  JointKind kind = JointKind::Revolute;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // joint position in the parent body frame
+  Eigen::Vector3d rpy = Eigen::Vector3d::Zero();     // joint frame orientation (URDF roll-pitch-yaw)
+  double pitch = 0;                                  // helical: metres per radian
+  bool actuated = true;
+  std::optional<std::pair<double, double>> limits;  // [lower, upper]
+  std::optional<double> torqueLimit;                // |tau| <= limit
+};
+
+struct BodySpec {
+  std::string id;
+  std::string parent;  // empty for the root body
+  JointSpec joint;     // ignored for the root body (its root kind decides)
+  Geometry geometry;
+  std::optional<double> mass;     // kg; with geometry and no inertia: inertia from the shape
+  std::optional<double> density;  // kg/m^3; mass from the shape's volume
+  std::optional<Eigen::Vector3d> com;      // centre of mass in the body frame
+  std::optional<Eigen::Matrix3d> inertia;  // about the centre of mass, body axes
+  Eigen::Vector3d color = Eigen::Vector3d(0.8, 0.8, 0.8);
+};
+
+struct CharacterSpec {
+  std::string id;
+  RootKind root = RootKind::Planar;
+  bool rootActuated = false;  // true for a thruster-driven particle
+  std::vector<BodySpec> bodies;
+
+  // Names of the degrees of freedom in order (root dofs, then joints in body order).
+  std::vector<std::string> dofNames() const;
+  const BodySpec* body(const std::string& id) const;
+};
+
+enum class TermKind { Pin, Keyframe, Rest, Contact, Clearance };
+
+struct TermSpec {
+  std::string id;
+  TermKind kind = TermKind::Pin;
+  bool enabled = true;
+  std::string character;
+  std::string body;  // pin, rest (optional), contact, clearance
+  double time = 0;   // pin, keyframe, rest
+  std::optional<double> until;  // pin: held over [time, until]
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();     // pin, clearance: in the body frame
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // pin: world target
+  std::array<bool, 3> axes{true, true, true};          // pin: which world axes are held
+  std::vector<std::pair<std::string, double>> values;  // keyframe: dof name -> value
+  std::vector<Eigen::Vector3d> points;                 // contact: body-frame points
+  double start = 0, end = 0;                           // contact, clearance interval
+  double friction = 1.0;                               // contact: Coulomb coefficient mu
+  double height = 0;                                   // clearance: minimum world y
+};
+
+struct ObjectiveSpec {
+  double effort = 1.0;       // weight of the integral of sum tau^2 over actuated joints
+  double power = 0.0;        // weight of the integral of sum (tau * qd)^2
+  double smoothness = 1e-3;  // weight of the integral of |q^(order)|^2 (relative, see solver)
+  int smoothnessOrder = 2;   // 2: acceleration, 3: jerk
+};
+
+struct TranscriptionSpec {
+  double controlPointsPerSecond = 20;
+  int samplesPerSegment = 3;
+};
+
+struct SolverSpec {
+  int maxOuterIterations = 30;
+  int maxInnerIterations = 60;
+  double tolerance = 1e-7;  // on scaled constraint rows (metres, radians, fraction of weight)
+};
+
+struct Scene {
+  std::string name;
+  double startTime = 0, endTime = 1;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0, -9.81, 0);
+  bool groundEnabled = true;
+  double groundHeight = 0;
+  TranscriptionSpec transcription;
+  SolverSpec solver;
+  std::vector<CharacterSpec> characters;
+  std::vector<TermSpec> terms;
+  ObjectiveSpec objective;
+
+  const CharacterSpec* character(const std::string& id) const;
+};
+
+std::string toString(RootKind k);
+std::string toString(GeometryKind k);
+std::string toString(JointKind k);
+std::string toString(TermKind k);
+
+}  // namespace spacetime

@@ -1,0 +1,267 @@
+// Rigid-body algorithms on a Model, writing into a Data: forward kinematics, body-point
+// kinematics, inverse dynamics (RNEA, RBDA Table 5.1), the joint-space inertia matrix (CRBA,
+// RBDA Table 6.2), forward dynamics (ABA, RBDA Table 7.1), centre of mass, momentum and energy.
+//
+// Templates on two scalars: S for the model's constants and T for the state (double, Jet, ...).
+// Joint-space arrays are passed as raw pointers of length model.dofCount(); a null qd or qdd
+// means zero. Gravity is the model's and enters as a fictitious base acceleration -g
+// (RBDA section 5.3), so after rnea() the Data's accelerations include it.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <vector>
+
+#include "dynamics/model.h"
+
+namespace spacetime {
+
+namespace detail {
+template <class T, class S>
+Motion<T> baseAcceleration(const Model<S>& model, bool withGravity) {
+  Motion<T> a0;
+  if (withGravity)
+    for (int k = 0; k < 3; ++k) a0.lin(k) = T(-model.gravity(k));
+  return a0;
+}
+
+// The forward sweep shared by FK and RNEA (RBDA Table 5.1, first loop).
+template <class T, class S>
+void forwardSweep(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd,
+                  const Motion<T>& a0) {
+  for (int i = 0; i < model.bodyCount(); ++i) {
+    const Body<S>& b = model.bodies[i];
+    const int k = b.dofIndex;
+    const Transform<T> XJ = k >= 0 ? b.joint.template transform<T>(q[k]) : Transform<T>();
+    d.X_parent[i] = compose(XJ, b.X_tree);
+    d.X_world[i] = b.parent >= 0 ? d.X_parent[i] * d.X_world[b.parent] : d.X_parent[i];
+    Motion<T> vJ, aJ;
+    if (k >= 0) {
+      const Motion<S> Sj = b.joint.motionSubspace();
+      const T qdk = qd ? qd[k] : T(0), qddk = qdd ? qdd[k] : T(0);
+      for (int c = 0; c < 3; ++c) {
+        vJ.ang(c) = Sj.ang(c) * qdk;
+        vJ.lin(c) = Sj.lin(c) * qdk;
+        aJ.ang(c) = Sj.ang(c) * qddk;
+        aJ.lin(c) = Sj.lin(c) * qddk;
+      }
+    }
+    if (b.parent >= 0) {
+      d.v[i] = d.X_parent[i].apply(d.v[b.parent]) + vJ;
+      d.a[i] = d.X_parent[i].apply(d.a[b.parent]) + aJ + crossMotion(d.v[i], vJ);
+    } else {
+      d.v[i] = vJ;
+      d.a[i] = d.X_parent[i].apply(a0) + aJ;
+    }
+  }
+}
+}  // namespace detail
+
+// Body poses only.
+template <class T, class S>
+void forwardKinematics(const Model<S>& model, Data<T>& d, const T* q) {
+  detail::forwardSweep<T, S>(model, d, q, nullptr, nullptr, Motion<T>());
+}
+
+// Body poses, spatial velocities and (true, gravity-free) spatial accelerations.
+template <class T, class S>
+void forwardKinematics(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd) {
+  detail::forwardSweep<T, S>(model, d, q, qd, qdd, Motion<T>());
+}
+
+// World position of a point given in body coordinates (after forwardKinematics).
+template <class T, class S>
+Vec3<T> pointPosition(const Data<T>& d, int body, const Vec3<S>& p) {
+  const Transform<T>& X = d.X_world[body];
+  Vec3<T> out;
+  for (int i = 0; i < 3; ++i)
+    out(i) = X.E(0, i) * p(0) + X.E(1, i) * p(1) + X.E(2, i) * p(2) + X.r(i);
+  return out;
+}
+
+// World velocity of a body-fixed point: E^T (v + w x p).
+template <class T, class S>
+Vec3<T> pointVelocity(const Data<T>& d, int body, const Vec3<S>& p) {
+  const Motion<T>& v = d.v[body];
+  const Vec3<T> vb = v.lin + cross3<T>(v.ang, p);
+  return d.X_world[body].E.transpose() * vb;
+}
+
+// World (classical) acceleration of a body-fixed point from the spatial acceleration
+// (RBDA eq. 2.42 rearranged): a_p = a_lin + alpha x p + w x (v_lin + w x p).
+// Valid after forwardKinematics with qdd (not after rnea, whose accelerations include -g).
+template <class T, class S>
+Vec3<T> pointAcceleration(const Data<T>& d, int body, const Vec3<S>& p) {
+  const Motion<T>& v = d.v[body];
+  const Motion<T>& a = d.a[body];
+  const Vec3<T> vb = v.lin + cross3<T>(v.ang, p);
+  const Vec3<T> ab = a.lin + cross3<T>(a.ang, p) + v.ang.cross(vb);
+  return d.X_world[body].E.transpose() * ab;
+}
+
+// Recursive Newton-Euler inverse dynamics (RBDA Table 5.1) with external point forces.
+// Writes the generalized forces into d.tau and returns them.
+template <class T, class S>
+const VecX<T>& rnea(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd,
+                    const std::vector<PointForce<T>>& fext = {}, bool withGravity = true) {
+  detail::forwardSweep<T, S>(model, d, q, qd, qdd,
+                             detail::baseAcceleration<T, S>(model, withGravity));
+  for (int i = 0; i < model.bodyCount(); ++i) {
+    const Inertia<S>& I = model.bodies[i].inertia;
+    if (model.bodies[i].isVirtual && I.mass == S(0)) {
+      d.f[i] = Force<T>();
+      continue;
+    }
+    d.f[i] = multiply(I, d.a[i]) + crossForce(d.v[i], multiply(I, d.v[i]));
+  }
+  for (const PointForce<T>& pf : fext) {
+    // The force as a spatial force about the world origin, then in body coordinates.
+    const Force<T> fw(pf.pointWorld.cross(pf.forceWorld), pf.forceWorld);
+    d.f[pf.body] -= d.X_world[pf.body].apply(fw);
+  }
+  for (int i = model.bodyCount() - 1; i >= 0; --i) {
+    const Body<S>& b = model.bodies[i];
+    if (b.dofIndex >= 0) {
+      const Motion<S> Sj = b.joint.motionSubspace();
+      T t = T(0);
+      for (int c = 0; c < 3; ++c) t += Sj.ang(c) * d.f[i].ang(c) + Sj.lin(c) * d.f[i].lin(c);
+      d.tau(b.dofIndex) = t;
+    }
+    if (b.parent >= 0) d.f[b.parent] += d.X_parent[i].applyInverse(d.f[i]);
+  }
+  return d.tau;
+}
+
+// Joint-space inertia matrix by the composite-rigid-body algorithm (RBDA Table 6.2).
+template <class T, class S>
+MatX<T> crba(const Model<S>& model, Data<T>& d, const T* q) {
+  forwardKinematics(model, d, q);
+  const int n = model.dofCount();
+  MatX<T> H = MatX<T>::Zero(n, n);
+  std::vector<Inertia<T>> Ic;
+  for (const auto& b : model.bodies) Ic.push_back(b.inertia.template cast<T>());
+  for (int i = model.bodyCount() - 1; i >= 0; --i) {
+    const Body<S>& b = model.bodies[i];
+    if (b.parent >= 0) Ic[b.parent] = Ic[b.parent] + Ic[i].expressedInParent(d.X_parent[i]);
+  }
+  for (int i = 0; i < model.bodyCount(); ++i) {
+    const Body<S>& bi = model.bodies[i];
+    if (bi.dofIndex < 0) continue;
+    const Motion<T> Si = bi.joint.motionSubspace().template cast<T>();
+    Force<T> F = multiply(Ic[i], Si);
+    H(bi.dofIndex, bi.dofIndex) = dot(Si, F);
+    int j = i;
+    while (model.bodies[j].parent >= 0) {
+      F = d.X_parent[j].applyInverse(F);
+      j = model.bodies[j].parent;
+      const Body<S>& bj = model.bodies[j];
+      if (bj.dofIndex < 0) continue;
+      const Motion<T> Sj = bj.joint.motionSubspace().template cast<T>();
+      H(bi.dofIndex, bj.dofIndex) = H(bj.dofIndex, bi.dofIndex) = dot(Sj, F);
+    }
+  }
+  return H;
+}
+
+// Forward dynamics by the articulated-body algorithm (RBDA Table 7.1), with external forces.
+template <class T, class S>
+VecX<T> aba(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* tau,
+            const std::vector<PointForce<T>>& fext = {}) {
+  const int nb = model.bodyCount();
+  detail::forwardSweep<T, S>(model, d, q, qd, nullptr, Motion<T>());
+  std::vector<Mat6<T>> IA(nb);
+  std::vector<Vec6<T>> pA(nb), c(nb), U(nb);
+  std::vector<T> D(nb, T(0)), u(nb, T(0));
+  std::vector<Mat6<T>> X(nb);
+  for (int i = 0; i < nb; ++i) {
+    const Body<S>& b = model.bodies[i];
+    X[i] = d.X_parent[i].matrix();
+    const Mat6<T> I = b.inertia.template cast<T>().matrix();
+    IA[i] = I;
+    const Vec6<T> v = d.v[i].vector();
+    Motion<T> vJ;
+    if (b.dofIndex >= 0) vJ = b.joint.motionSubspace().template cast<T>() * qd[b.dofIndex];
+    c[i] = crossMotion(d.v[i], vJ).vector();
+    const Vec6<T> Iv = I * v;
+    pA[i] = crossForce(d.v[i], Force<T>(Iv.template head<3>(), Iv.template tail<3>())).vector();
+  }
+  for (const PointForce<T>& pf : fext) {
+    const Force<T> fw(pf.pointWorld.cross(pf.forceWorld), pf.forceWorld);
+    pA[pf.body] -= d.X_world[pf.body].apply(fw).vector();
+  }
+  for (int i = nb - 1; i >= 0; --i) {
+    const Body<S>& b = model.bodies[i];
+    // I^a = I^A - U D^-1 U^T and p^a = p^A + I^a c + U D^-1 u (RBDA Table 7.1).
+    Mat6<T> Ia = IA[i];
+    Vec6<T> Ud = Vec6<T>::Zero();
+    if (b.dofIndex >= 0) {
+      const Vec6<T> Sv = b.joint.motionSubspace().template cast<T>().vector();
+      U[i] = IA[i] * Sv;
+      D[i] = Sv.dot(U[i]);
+      u[i] = tau[b.dofIndex] - Sv.dot(pA[i]);
+      Ia -= U[i] * U[i].transpose() / D[i];
+      Ud = U[i] * (u[i] / D[i]);
+    }
+    const Vec6<T> pa = pA[i] + Ia * c[i] + Ud;
+    if (b.parent >= 0) {
+      IA[b.parent] += X[i].transpose() * Ia * X[i];
+      pA[b.parent] += X[i].transpose() * pa;
+    }
+  }
+  VecX<T> qdd = VecX<T>::Zero(model.dofCount());
+  std::vector<Vec6<T>> a(nb);
+  const Vec6<T> a0 = detail::baseAcceleration<T, S>(model, true).vector();
+  for (int i = 0; i < nb; ++i) {
+    const Body<S>& b = model.bodies[i];
+    const Vec6<T> ap = X[i] * (b.parent >= 0 ? a[b.parent] : a0) + c[i];
+    a[i] = ap;
+    if (b.dofIndex >= 0) {
+      const Vec6<T> Sv = b.joint.motionSubspace().template cast<T>().vector();
+      qdd(b.dofIndex) = (u[i] - U[i].dot(ap)) / D[i];
+      a[i] += Sv * qdd(b.dofIndex);
+    }
+  }
+  return qdd;
+}
+
+// Centre of mass in world coordinates (after forwardKinematics).
+template <class T, class S>
+Vec3<T> centerOfMass(const Model<S>& model, const Data<T>& d) {
+  Vec3<T> sum = Vec3<T>::Zero();
+  S mass = S(0);
+  for (int i = 0; i < model.bodyCount(); ++i) {
+    const Inertia<S>& I = model.bodies[i].inertia;
+    if (I.mass == S(0)) continue;
+    sum += pointPosition(d, i, I.com()) * I.mass;
+    mass += I.mass;
+  }
+  return mass > S(0) ? Vec3<T>(sum / mass) : sum;
+}
+
+// Spatial momentum about the world origin in world coordinates (after forwardKinematics with qd):
+// ang is the angular momentum about the origin, lin the linear momentum.
+template <class T, class S>
+Force<T> spatialMomentum(const Model<S>& model, const Data<T>& d) {
+  Force<T> h;
+  for (int i = 0; i < model.bodyCount(); ++i)
+    h += d.X_world[i].applyInverse(multiply(model.bodies[i].inertia, d.v[i]));
+  return h;
+}
+
+template <class T, class S>
+T kineticEnergy(const Model<S>& model, const Data<T>& d) {
+  T e = T(0);
+  for (int i = 0; i < model.bodyCount(); ++i)
+    e += dot(d.v[i], multiply(model.bodies[i].inertia, d.v[i]));
+  return e * T(0.5);
+}
+
+// Potential energy -m g . c, zero at the world origin.
+template <class T, class S>
+T potentialEnergy(const Model<S>& model, const Data<T>& d) {
+  const Vec3<T> c = centerOfMass(model, d);
+  T e = T(0);
+  for (int k = 0; k < 3; ++k) e -= model.totalMass() * model.gravity(k) * c(k);
+  return e;
+}
+
+}  // namespace spacetime

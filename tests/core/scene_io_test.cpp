@@ -1,0 +1,90 @@
+// The scene format: shipped scenes load; save -> load -> save is identical; malformed files get
+// an error naming the file, the field, the value and what is allowed - never a crash.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/scene_io.h"
+
+namespace spacetime {
+namespace {
+
+const std::string kScenes = std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/";
+
+TEST(SceneIo, ShippedScenesLoadAndRoundTrip) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kScenes)) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    const SceneLoadResult r = loadSceneFile(entry.path().string());
+    ASSERT_TRUE(r.scene) << r.error;
+    const std::string text = sceneToJson(*r.scene);
+    const SceneLoadResult again = parseScene(text, "roundtrip");
+    ASSERT_TRUE(again.scene) << again.error;
+    EXPECT_EQ(sceneToJson(*again.scene), text) << entry.path();
+  }
+  EXPECT_GE(count, 5);
+}
+
+TEST(SceneIo, AtomicSaveThenLoad) {
+  const SceneLoadResult r = loadSceneFile(kScenes + "luxo_jump.json");
+  ASSERT_TRUE(r.scene) << r.error;
+  const std::string path = ::testing::TempDir() + "/saved_scene.json";
+  std::string error;
+  ASSERT_TRUE(saveSceneFile(*r.scene, path, &error)) << error;
+  const SceneLoadResult back = loadSceneFile(path);
+  ASSERT_TRUE(back.scene) << back.error;
+  EXPECT_EQ(sceneToJson(*back.scene), sceneToJson(*r.scene));
+  EXPECT_FALSE(saveSceneFile(*r.scene, "/nonexistent-dir/x.json", &error));
+  EXPECT_NE(error.find("/nonexistent-dir/x.json"), std::string::npos);
+}
+
+struct BadCase {
+  std::string json;
+  std::string mustMention;
+};
+
+std::string minimalWith(const std::string& characterBody, const std::string& terms = "[]",
+                        const std::string& extra = "") {
+  return R"({"format": "spacetime-scene", "formatVersion": 1, "time": {"start": 0, "end": 1},)" +
+         extra + R"("characters": [{"id": "c", "root": "planar", "bodies": [)" + characterBody +
+         R"(]}], "terms": )" + terms + "}";
+}
+
+TEST(SceneIo, BadFilesNameFileFieldAndValue) {
+  const std::string body = R"({"id": "base", "mass": 1})";
+  const std::vector<BadCase> cases = {
+      {"{not json", "not valid JSON"},
+      {R"({"format": "other", "formatVersion": 1})", "'format'"},
+      {R"({"format": "spacetime-scene", "formatVersion": 99, "time": {"start":0,"end":1}, "characters": []})",
+       "newer Spacetime"},
+      {R"({"format": "spacetime-scene", "formatVersion": 1, "characters": []})", "'time'"},
+      {minimalWith(R"({"id": "base", "mass": -1})"), "characters[0].bodies[0].mass': value -1"},
+      {minimalWith(R"({"id": "base"})"), "needs a mass or a density"},
+      {minimalWith(body + R"(, {"id": "arm", "parent": "nope", "mass": 1, "joint": {"id": "j", "type": "revolute"}})"),
+       "characters[0].bodies[1].parent': value \"nope\""},
+      {minimalWith(body + R"(, {"id": "arm", "parent": "base", "mass": 1, "joint": {"id": "j", "type": "ball"}})"),
+       "one of \"revolute\""},
+      {minimalWith(body, R"([{"id": "k", "type": "keyframe", "character": "c", "time": 0.5, "values": {"elbow": 1}}])"),
+       "terms[0].values.elbow': unknown degree of freedom"},
+      {minimalWith(body, R"([{"id": "p", "type": "pin", "character": "c", "body": "base", "position": [0,0,0], "time": 3}])"),
+       "terms[0].time': value 3"},
+      {minimalWith(body, R"([{"id": "p", "type": "contact", "character": "c", "body": "base", "points": [[0,0,0]], "start": 0.5, "end": 0.2}])"),
+       "terms[0].end'"},
+      {minimalWith(R"({"id": "base", "mass": 1, "masss": 2})"), "bodies[0].masss': unknown field"},
+      {minimalWith(R"({"id": "base", "mass": 1, "inertia": [1, 1, 5]})"), "triangle inequality"},
+      {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
+  };
+  for (const auto& c : cases) {
+    const SceneLoadResult r = parseScene(c.json, "bad.json");
+    EXPECT_FALSE(r.scene) << c.json;
+    EXPECT_EQ(r.error.rfind("bad.json", 0), 0u) << r.error;
+    EXPECT_NE(r.error.find(c.mustMention), std::string::npos) << r.error;
+  }
+  const SceneLoadResult missing = loadSceneFile("/no/such/scene.json");
+  EXPECT_FALSE(missing.scene);
+  EXPECT_NE(missing.error.find("/no/such/scene.json"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace spacetime
