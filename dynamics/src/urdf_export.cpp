@@ -83,6 +83,9 @@ UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character
   out << "<!-- Exported by Spacetime. Movable joints are the character's degrees of freedom in"
          " order; virtual links of the floating base are massless. -->\n";
   out << "<robot name=\"" << model.name << "\">\n";
+  // MuJoCo refuses moving bodies without mass; its own extension lifts only the massless
+  // virtual links to 1e-12 kg (other URDF readers ignore the element).
+  out << "  <mujoco><compiler boundmass=\"1e-12\" boundinertia=\"1e-14\" discardvisual=\"true\"/></mujoco>\n";
   out << "  <link name=\"" << world << "\"/>\n";
   for (int i = 0; i < model.bodyCount(); ++i) {
     const Body<double>& b = model.bodies[i];

@@ -1,1 +1,91 @@
+// Sampling a solution into an Animation.
+#include "solver/animation.h"
 
+#include <cmath>
+
+#include "dynamics/algorithms.h"
+
+namespace spacetime {
+
+std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
+                                                     double t) {
+  std::vector<PointForce<double>> out;
+  for (size_t j = 0; j < problem.contacts().size(); ++j) {
+    const ContactVariables& ct = problem.contacts()[j];
+    if (ct.character != c || t < ct.start - 1e-12 || t > ct.end + 1e-12) continue;
+    const std::vector<Eigen::Vector3d> f = problem.contactForces(static_cast<int>(j), t);
+    for (size_t p = 0; p < f.size(); ++p) {
+      PointForce<double> pf;
+      pf.body = ct.points.body;
+      pf.pointIsLocal = true;
+      pf.pointWorld = ct.points.points[p];
+      pf.forceWorld = f[p];
+      out.push_back(pf);
+    }
+  }
+  return out;
+}
+
+Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t) {
+  const Model<double>& model = *problem.characters()[c].model;
+  const Eigen::VectorXd q = problem.jointState(c, t, 0), qd = problem.jointState(c, t, 1),
+                        qdd = problem.jointState(c, t, 2);
+  Data<double> data(model);
+  return rnea(model, data, q.data(), qd.data(), qdd.data(), contactPointForcesAt(problem, c, t));
+}
+
+Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {
+  Animation anim;
+  const Scene& scene = problem.scene();
+  const int frames =
+      std::max(2, static_cast<int>(std::lround((scene.endTime - scene.startTime) * rateHz)) + 1);
+  for (size_t c = 0; c < problem.characters().size(); ++c) {
+    const int ci = static_cast<int>(c);
+    const Model<double>& model = *problem.characters()[c].model;
+    CharacterAnimation ca;
+    ca.name = model.name;
+    ca.gravity = scene.gravity;
+    ca.dofs = model.dofNames();
+    ca.actuated = model.actuatedDofs();
+    const int n = model.dofCount();
+    ca.q.resize(frames, n);
+    ca.qd.resize(frames, n);
+    ca.qdd.resize(frames, n);
+    ca.tau.resize(frames, n);
+    for (size_t j = 0; j < problem.contacts().size(); ++j) {
+      const ContactVariables& ct = problem.contacts()[j];
+      if (ct.character != ci) continue;
+      for (size_t p = 0; p < ct.points.points.size(); ++p) {
+        ContactTrack track;
+        track.term = scene.terms[ct.term].id;
+        track.link = model.bodies[ct.points.body].name;
+        track.pointIndex = static_cast<int>(p);
+        ca.contacts.push_back(track);
+      }
+    }
+    Data<double> data(model);
+    for (int f = 0; f < frames; ++f) {
+      const double t = scene.startTime + (scene.endTime - scene.startTime) * f / (frames - 1);
+      ca.times.push_back(t);
+      ca.q.row(f) = problem.jointState(ci, t, 0).transpose();
+      ca.qd.row(f) = problem.jointState(ci, t, 1).transpose();
+      ca.qdd.row(f) = problem.jointState(ci, t, 2).transpose();
+      ca.tau.row(f) = generalizedForcesAt(problem, ci, t).transpose();
+      forwardKinematics(model, data, ca.q.row(f).transpose().eval().data());
+      size_t k = 0;
+      for (size_t j = 0; j < problem.contacts().size(); ++j) {
+        const ContactVariables& ct = problem.contacts()[j];
+        if (ct.character != ci) continue;
+        const std::vector<Eigen::Vector3d> forces = problem.contactForces(static_cast<int>(j), t);
+        for (size_t p = 0; p < ct.points.points.size(); ++p, ++k) {
+          ca.contacts[k].position.push_back(pointPosition(data, ct.points.body, ct.points.points[p]));
+          ca.contacts[k].force.push_back(forces[p]);
+        }
+      }
+    }
+    anim.characters.push_back(std::move(ca));
+  }
+  return anim;
+}
+
+}  // namespace spacetime

@@ -1,1 +1,246 @@
+// Augmented-Lagrangian outer loop around Ceres (see augmented_lagrangian.h).
+#include "solver/augmented_lagrangian.h"
 
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <cmath>
+
+namespace spacetime {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Forwards Ceres iterations to the user's callback and implements cancel and the time limit.
+class ProgressForwarder : public ceres::IterationCallback {
+ public:
+  ProgressForwarder(const SpacetimeProblem& problem, const ProgressCallback& callback,
+                    const std::atomic<bool>* cancel, Clock::time_point start, double maxSeconds)
+      : problem_(problem), callback_(callback), cancel_(cancel), start_(start),
+        maxSeconds_(maxSeconds) {}
+
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (s.iteration > 0) ++iterations;
+    if (cancel_ && cancel_->load()) {
+      cancelled = true;
+      return ceres::SOLVER_ABORT;
+    }
+    if (secondsSince(start_) > maxSeconds_) {
+      timedOut = true;
+      return ceres::SOLVER_ABORT;
+    }
+    if (callback_ && s.iteration > 0) {
+      const ProblemMeasures m = measure(problem_);
+      IterationReport r;
+      r.outer = outer;
+      r.iterations = iterations;
+      r.objective = m.objective;
+      r.maxViolation = m.maxViolation;
+      r.rho = problem_.residuals().empty() ? 0 : rho;
+      if (!callback_(r)) {
+        cancelled = true;
+        return ceres::SOLVER_ABORT;
+      }
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+  int outer = 0;
+  int iterations = 0;
+  double rho = 0;
+  bool cancelled = false, timedOut = false;
+
+ private:
+  const SpacetimeProblem& problem_;
+  const ProgressCallback& callback_;
+  const std::atomic<bool>* cancel_;
+  Clock::time_point start_;
+  double maxSeconds_;
+};
+
+bool allFinite(const std::vector<double>& v) {
+  for (double x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+}  // namespace
+
+std::string SolverOptions::validate() const {
+  if (maxOuterIterations < 1) return "maxOuterIterations must be at least 1";
+  if (maxInnerIterations < 1) return "maxInnerIterations must be at least 1";
+  if (!(tolerance > 0)) return "tolerance must be > 0";
+  if (!(initialPenalty > 0) || !(maxPenalty >= initialPenalty)) return "penalties must satisfy 0 < initialPenalty <= maxPenalty";
+  if (!(penaltyGrowth > 1)) return "penaltyGrowth must be > 1";
+  if (!(maxSeconds > 0)) return "maxSeconds must be > 0";
+  if (threads < 1) return "threads must be at least 1";
+  return "";
+}
+
+std::string toString(SolveStatus s) {
+  switch (s) {
+    case SolveStatus::Converged: return "converged";
+    case SolveStatus::IterationLimit: return "iteration limit";
+    case SolveStatus::TimeLimit: return "time limit";
+    case SolveStatus::Cancelled: return "cancelled";
+    case SolveStatus::NumericalFailure: return "numerical failure";
+    case SolveStatus::InvalidOptions: return "invalid options";
+  }
+  return "?";
+}
+
+ProblemMeasures measure(const SpacetimeProblem& problem) {
+  ProblemMeasures m;
+  for (const TermResidual* r : problem.residuals()) {
+    const std::vector<double> rows = r->rawRowsNow();
+    const auto& kinds = r->kernel().rowKinds();
+    for (size_t i = 0; i < rows.size(); ++i) {
+      double v = 0;
+      switch (kinds[i]) {
+        case RowKind::Objective: m.objective += rows[i] * rows[i]; continue;
+        case RowKind::Equality: v = std::abs(rows[i]); break;
+        case RowKind::Inequality: v = std::max(0.0, rows[i]); break;
+      }
+      if (!(v <= m.maxViolation)) {  // also catches NaN
+        m.maxViolation = v;
+        m.worstConstraint = r->kernel().label();
+      }
+    }
+  }
+  return m;
+}
+
+SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
+                             const ProgressCallback& callback, const std::atomic<bool>* cancel) {
+  const Clock::time_point start = Clock::now();
+  SolverSummary summary;
+  if (const std::string err = options.validate(); !err.empty()) {
+    summary.status = SolveStatus::InvalidOptions;
+    summary.reason = "invalid solver options: " + err;
+    return summary;
+  }
+  AugmentedLagrangianState& al = problem.augmentedLagrangian();
+  if (!options.warmStart || !(al.rho > 0)) {
+    std::fill(al.lambda.begin(), al.lambda.end(), 0.0);
+    al.rho = options.initialPenalty;
+  }
+
+  ceres::Solver::Options co;
+  co.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  co.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  co.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  co.max_num_iterations = options.maxInnerIterations;
+  co.function_tolerance = 1e-10;
+  co.gradient_tolerance = 1e-10;
+  co.parameter_tolerance = 1e-10;
+  co.num_threads = options.threads;
+  co.logging_type = ceres::SILENT;
+  co.update_state_every_iteration = true;
+  if (getenv("DOGLEG")) co.trust_region_strategy_type = ceres::DOGLEG;
+  if (getenv("RADIUS")) co.initial_trust_region_radius = atof(getenv("RADIUS"));
+  if (getenv("NONMONO")) co.use_nonmonotonic_steps = true;
+  if (getenv("FTOL")) co.function_tolerance = atof(getenv("FTOL"));
+  ProgressForwarder forwarder(problem, callback, cancel, start, options.maxSeconds);
+  co.callbacks.push_back(&forwarder);
+
+  SolutionState lastGood = problem.state();
+  ProblemMeasures m = measure(problem);
+  double previousViolation = m.maxViolation;
+  summary.status = SolveStatus::IterationLimit;
+  summary.reason = "reached the limit of " + std::to_string(options.maxOuterIterations) +
+                   " multiplier updates before the constraints met the tolerance";
+  for (int outer = 0; outer < options.maxOuterIterations; ++outer) {
+    forwarder.outer = outer;
+    forwarder.rho = al.rho;
+    ceres::Solver::Summary cs;
+    ceres::Solve(co, &problem.ceresProblem(), &cs);
+    summary.outerIterations = outer + 1;
+    summary.jacobianSeconds += cs.residual_evaluation_time_in_seconds + cs.jacobian_evaluation_time_in_seconds;
+    summary.linearSolverSeconds += cs.linear_solver_time_in_seconds;
+    if (forwarder.cancelled) {
+      summary.status = SolveStatus::Cancelled;
+      summary.reason = "cancelled by the user; the last accepted iterate is kept";
+      break;
+    }
+    if (forwarder.timedOut) {
+      summary.status = SolveStatus::TimeLimit;
+      summary.reason = "stopped after the time limit of " + std::to_string(options.maxSeconds) + " s";
+      break;
+    }
+    m = measure(problem);
+    if (cs.termination_type == ceres::FAILURE || !std::isfinite(m.objective) ||
+        !std::isfinite(m.maxViolation) || !allFinite(problem.variables())) {
+      problem.restore(lastGood);
+      summary.status = SolveStatus::NumericalFailure;
+      summary.reason = "numerical failure in the inner solve (" + cs.message +
+                       "); the last good iterate is kept";
+      break;
+    }
+    lastGood = problem.state();
+    const bool innerConverged = cs.termination_type == ceres::CONVERGENCE;
+    if (m.maxViolation <= options.tolerance && innerConverged) {
+      summary.status = SolveStatus::Converged;
+      summary.converged = true;
+      summary.reason = "constraints within tolerance and the augmented Lagrangian stationary";
+      break;
+    }
+    // First-order multiplier update (Nocedal & Wright eq. 17.39; 17.67 for inequalities).
+    for (const TermResidual* r : problem.residuals()) {
+      const std::vector<double> rows = r->rawRowsNow();
+      const auto& kinds = r->kernel().rowKinds();
+      for (size_t i = 0; i < rows.size(); ++i) {
+        double& lambda = al.lambda[r->firstMultiplier() + i];
+        if (kinds[i] == RowKind::Equality) lambda += al.rho * rows[i];
+        else if (kinds[i] == RowKind::Inequality) lambda = std::max(0.0, lambda + al.rho * rows[i]);
+      }
+    }
+    if (m.maxViolation > 0.25 * previousViolation)
+      al.rho = std::min(al.rho * options.penaltyGrowth, options.maxPenalty);
+    previousViolation = m.maxViolation;
+  }
+  // Constraint projection: land exactly on the constraints from the AL's near-optimal point.
+  if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Converged) {
+    m = measure(problem);
+    if (m.maxViolation > options.tolerance) {
+      ceres::Solver::Options po = co;
+      po.max_num_iterations = options.maxProjectionIterations;
+      po.function_tolerance = 1e-20;
+      po.gradient_tolerance = 1e-20;
+      po.parameter_tolerance = 1e-14;
+      al.projectOnly = true;
+      ceres::Solver::Summary ps;
+      ceres::Solve(po, &problem.ceresProblem(), &ps);
+      al.projectOnly = false;
+      summary.jacobianSeconds += ps.residual_evaluation_time_in_seconds + ps.jacobian_evaluation_time_in_seconds;
+      summary.linearSolverSeconds += ps.linear_solver_time_in_seconds;
+      const ProblemMeasures after = measure(problem);
+      if (!std::isfinite(after.maxViolation) || !allFinite(problem.variables())) {
+        problem.restore(lastGood);
+        summary.status = SolveStatus::NumericalFailure;
+        summary.reason = "numerical failure in the constraint projection; the last good iterate is kept";
+      } else if (after.maxViolation <= options.tolerance && !forwarder.cancelled && !forwarder.timedOut) {
+        summary.status = SolveStatus::Converged;
+        summary.converged = true;
+        summary.reason = "constraints within tolerance after the augmented-Lagrangian iterations "
+                         "and a Gauss-Newton projection onto the constraints";
+      } else if (forwarder.cancelled) {
+        summary.status = SolveStatus::Cancelled;
+        summary.reason = "cancelled by the user; the last accepted iterate is kept";
+      }
+    }
+  }
+  m = measure(problem);
+  summary.objective = m.objective;
+  summary.maxViolation = m.maxViolation;
+  summary.worstConstraint = m.worstConstraint;
+  summary.iterations = forwarder.iterations;
+  summary.solveSeconds = secondsSince(start);
+  return summary;
+}
+
+}  // namespace spacetime

@@ -1,1 +1,265 @@
+// Kernel implementations. This translation unit instantiates the dynamics for JetChunk; keep
+// the other Jet-heavy code out of it and it out of headers so builds stay fast.
+#include "solver/kernels.h"
 
+#include <cmath>
+
+#include "dynamics/algorithms.h"
+
+namespace spacetime {
+
+void Kernel::evaluateWithJacobian(const double* z, double* rows, double* jacobian) const {
+  const int n = inputs_, m = rowCount();
+  std::vector<JetChunk> zj(n), out(m);
+  if (n == 0) {
+    evaluate(z, rows);
+    return;
+  }
+  // Forward mode in chunks of kJetWidth seeded directions.
+  for (int start = 0; start < n; start += kJetWidth) {
+    for (int i = 0; i < n; ++i) {
+      zj[i] = JetChunk(z[i]);
+      if (i >= start && i < start + kJetWidth) zj[i].v[i - start] = 1.0;
+    }
+    evaluate(zj.data(), out.data());
+    const int width = std::min(kJetWidth, n - start);
+    for (int r = 0; r < m; ++r) {
+      if (start == 0) rows[r] = out[r].a;
+      for (int k = 0; k < width; ++k) jacobian[r * n + start + k] = out[r].v[k];
+    }
+  }
+}
+
+#define SPACETIME_DEFINE_EVALUATORS(K)                                                   \
+  void K::evaluate(const double* z, double* rows) const { compute(z, rows); }            \
+  void K::evaluate(const JetChunk* z, JetChunk* rows) const { compute(z, rows); }
+
+// --- DynamicsKernel ----------------------------------------------------------------------
+
+DynamicsKernel::DynamicsKernel(std::shared_ptr<const Model<double>> model,
+                               std::vector<ContactPoints> contacts, int forceDims,
+                               const Options& options, std::string label)
+    : model_(std::move(model)), contacts_(std::move(contacts)), forceDims_(forceDims),
+      options_(options) {
+  label_ = std::move(label);
+  const int n = model_->dofCount();
+  inputs_ = 3 * n;
+  for (const auto& c : contacts_) inputs_ += forceDims_ * static_cast<int>(c.points.size());
+  for (int d = 0; d < n; ++d) {
+    const Body<double>& b = model_->bodies[model_->dofBody[d]];
+    if (!b.actuated) {
+      if (options_.physics) rows_.push_back({Row::Physics, d});
+      continue;
+    }
+    if (options_.effortWeight > 0) rows_.push_back({Row::Effort, d});
+    if (options_.powerWeight > 0) rows_.push_back({Row::Power, d});
+    if (options_.torqueLimits && b.hasEffortLimit) {
+      rows_.push_back({Row::TorqueUpper, d});
+      rows_.push_back({Row::TorqueLower, d});
+    }
+  }
+  for (const auto& [row, dof] : rows_)
+    kinds_.push_back(row == Row::Physics                                  ? RowKind::Equality
+                     : (row == Row::Effort || row == Row::Power) ? RowKind::Objective
+                                                                          : RowKind::Inequality);
+}
+
+template <class T>
+void DynamicsKernel::compute(const T* z, T* rows) const {
+  const int n = model_->dofCount();
+  const T* q = z;
+  const T* qd = z + n;
+  const T* qdd = z + 2 * n;
+  std::vector<PointForce<T>> fext;
+  int k = 3 * n;
+  for (const auto& c : contacts_)
+    for (const auto& p : c.points) {
+      PointForce<T> pf;
+      pf.body = c.body;
+      pf.pointIsLocal = true;
+      pf.pointWorld = p.cast<T>();
+      pf.forceWorld = Vec3<T>(z[k], z[k + 1], forceDims_ == 3 ? z[k + 2] : T(0));
+      k += forceDims_;
+      fext.push_back(pf);
+    }
+  Data<T> data(*model_);
+  const VecX<T>& tau = rnea(*model_, data, q, qd, qdd, fext);
+  const double sqrtEffort = std::sqrt(options_.effortWeight);
+  const double sqrtPower = std::sqrt(options_.powerWeight);
+  for (size_t r = 0; r < rows_.size(); ++r) {
+    const auto [row, d] = rows_[r];
+    const Body<double>& b = model_->bodies[model_->dofBody[d]];
+    switch (row) {
+      case Row::Physics: rows[r] = tau[d] * options_.weightScale; break;
+      case Row::Effort: rows[r] = tau[d] * sqrtEffort; break;
+      case Row::Power: rows[r] = tau[d] * qd[d] * sqrtPower; break;
+      case Row::TorqueUpper: rows[r] = (tau[d] - b.effortLimit) * options_.weightScale; break;
+      case Row::TorqueLower: rows[r] = (-tau[d] - b.effortLimit) * options_.weightScale; break;
+    }
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(DynamicsKernel)
+
+// --- WeightedValueKernel -----------------------------------------------------------------
+
+WeightedValueKernel::WeightedValueKernel(int size, double weight, std::string label)
+    : sqrtWeight_(std::sqrt(weight)) {
+  label_ = std::move(label);
+  inputs_ = size;
+  kinds_.assign(size, RowKind::Objective);
+}
+
+template <class T>
+void WeightedValueKernel::compute(const T* z, T* rows) const {
+  for (int i = 0; i < inputs_; ++i) rows[i] = z[i] * sqrtWeight_;
+}
+SPACETIME_DEFINE_EVALUATORS(WeightedValueKernel)
+
+// --- TargetKernel ------------------------------------------------------------------------
+
+TargetKernel::TargetKernel(int size, std::vector<std::pair<int, double>> targets, std::string label)
+    : targets_(std::move(targets)) {
+  label_ = std::move(label);
+  inputs_ = size;
+  kinds_.assign(targets_.size(), RowKind::Equality);
+}
+
+template <class T>
+void TargetKernel::compute(const T* z, T* rows) const {
+  for (size_t i = 0; i < targets_.size(); ++i) rows[i] = z[targets_[i].first] - targets_[i].second;
+}
+SPACETIME_DEFINE_EVALUATORS(TargetKernel)
+
+// --- BodyRestKernel ----------------------------------------------------------------------
+
+BodyRestKernel::BodyRestKernel(std::shared_ptr<const Model<double>> model, int body,
+                               std::string label)
+    : model_(std::move(model)), body_(body) {
+  label_ = std::move(label);
+  inputs_ = 2 * model_->dofCount();
+  kinds_.assign(6, RowKind::Equality);
+}
+
+template <class T>
+void BodyRestKernel::compute(const T* z, T* rows) const {
+  Data<T> data(*model_);
+  forwardKinematics(*model_, data, z, z + model_->dofCount(), static_cast<const T*>(nullptr));
+  const Vec6<T> v = data.v[body_].vector();
+  for (int i = 0; i < 6; ++i) rows[i] = v[i];
+}
+SPACETIME_DEFINE_EVALUATORS(BodyRestKernel)
+
+// --- PinKernel ---------------------------------------------------------------------------
+
+PinKernel::PinKernel(std::shared_ptr<const Model<double>> model, int body,
+                     const Eigen::Vector3d& point, const Eigen::Vector3d& target,
+                     std::array<bool, 3> axes, std::string label)
+    : model_(std::move(model)), body_(body), point_(point), target_(target) {
+  label_ = std::move(label);
+  inputs_ = model_->dofCount();
+  for (int a = 0; a < 3; ++a)
+    if (axes[a]) axes_.push_back(a);
+  kinds_.assign(axes_.size(), RowKind::Equality);
+}
+
+template <class T>
+void PinKernel::compute(const T* z, T* rows) const {
+  Data<T> data(*model_);
+  forwardKinematics(*model_, data, z);
+  const Vec3<T> p = pointPosition(data, body_, point_);
+  for (size_t i = 0; i < axes_.size(); ++i) rows[i] = p[axes_[i]] - target_[axes_[i]];
+}
+SPACETIME_DEFINE_EVALUATORS(PinKernel)
+
+// --- ContactAnchorKernel -----------------------------------------------------------------
+
+ContactAnchorKernel::ContactAnchorKernel(std::shared_ptr<const Model<double>> model,
+                                         const ContactPoints& contact, double groundHeight,
+                                         std::string label)
+    : model_(std::move(model)), contact_(contact), ground_(groundHeight) {
+  label_ = std::move(label);
+  inputs_ = model_->dofCount() + 2 * static_cast<int>(contact_.points.size());
+  kinds_.assign(3 * contact_.points.size(), RowKind::Equality);
+}
+
+template <class T>
+void ContactAnchorKernel::compute(const T* z, T* rows) const {
+  Data<T> data(*model_);
+  forwardKinematics(*model_, data, z);
+  const T* anchors = z + model_->dofCount();
+  for (size_t i = 0; i < contact_.points.size(); ++i) {
+    const Vec3<T> p = pointPosition(data, contact_.body, contact_.points[i]);
+    rows[3 * i + 0] = p.x() - anchors[2 * i];
+    rows[3 * i + 1] = p.y() - ground_;
+    rows[3 * i + 2] = p.z() - anchors[2 * i + 1];
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(ContactAnchorKernel)
+
+// --- FrictionConeKernel ------------------------------------------------------------------
+
+FrictionConeKernel::FrictionConeKernel(int points, int forceDims, double mu, double weightScale,
+                                       std::string label)
+    : points_(points), dims_(forceDims), mu_(mu), scale_(weightScale) {
+  label_ = std::move(label);
+  inputs_ = points * forceDims;
+  kinds_.assign(points * (forceDims == 3 ? 5 : 3), RowKind::Inequality);
+}
+
+template <class T>
+void FrictionConeKernel::compute(const T* z, T* rows) const {
+  int r = 0;
+  const double muFacet = dims_ == 3 ? mu_ / std::sqrt(2.0) : mu_;
+  for (int i = 0; i < points_; ++i) {
+    const T* f = z + i * dims_;
+    rows[r++] = -f[1] * scale_;  // push only
+    rows[r++] = (f[0] - muFacet * f[1]) * scale_;
+    rows[r++] = (-f[0] - muFacet * f[1]) * scale_;
+    if (dims_ == 3) {
+      rows[r++] = (f[2] - muFacet * f[1]) * scale_;
+      rows[r++] = (-f[2] - muFacet * f[1]) * scale_;
+    }
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(FrictionConeKernel)
+
+// --- ClearanceKernel ---------------------------------------------------------------------
+
+ClearanceKernel::ClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
+                                 const Eigen::Vector3d& point, double height, std::string label)
+    : model_(std::move(model)), body_(body), point_(point), height_(height) {
+  label_ = std::move(label);
+  inputs_ = model_->dofCount();
+  kinds_.assign(1, RowKind::Inequality);
+}
+
+template <class T>
+void ClearanceKernel::compute(const T* z, T* rows) const {
+  Data<T> data(*model_);
+  forwardKinematics(*model_, data, z);
+  rows[0] = height_ - pointPosition(data, body_, point_).y();
+}
+SPACETIME_DEFINE_EVALUATORS(ClearanceKernel)
+
+// --- JointLimitKernel --------------------------------------------------------------------
+
+JointLimitKernel::JointLimitKernel(std::shared_ptr<const Model<double>> model, std::string label)
+    : model_(std::move(model)) {
+  label_ = std::move(label);
+  inputs_ = model_->dofCount();
+  for (int d = 0; d < model_->dofCount(); ++d)
+    if (model_->bodies[model_->dofBody[d]].hasPositionLimits) dofs_.push_back(d);
+  kinds_.assign(2 * dofs_.size(), RowKind::Inequality);
+}
+
+template <class T>
+void JointLimitKernel::compute(const T* z, T* rows) const {
+  for (size_t i = 0; i < dofs_.size(); ++i) {
+    const Body<double>& b = model_->bodies[model_->dofBody[dofs_[i]]];
+    rows[2 * i] = z[dofs_[i]] - b.upper;
+    rows[2 * i + 1] = b.lower - z[dofs_[i]];
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(JointLimitKernel)
+
+}  // namespace spacetime

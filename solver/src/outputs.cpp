@@ -1,1 +1,131 @@
+// JSON writers for the command-line outputs (see outputs.h).
+#include "solver/outputs.h"
 
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "dynamics/urdf_export.h"
+
+namespace spacetime {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+json vec3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json rows(const Eigen::MatrixXd& m) {
+  json out = json::array();
+  for (int r = 0; r < m.rows(); ++r) {
+    json row = json::array();
+    for (int c = 0; c < m.cols(); ++c) row.push_back(m(r, c));
+    out.push_back(row);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
+                        const SpacetimeProblem& problem) {
+  json j;
+  j["converged"] = s.converged;
+  j["status"] = toString(s.status);
+  j["reason"] = s.reason;
+  j["objective"] = s.objective;
+  j["iterations"] = s.iterations;
+  j["outer_iterations"] = s.outerIterations;
+  j["solve_seconds"] = s.solveSeconds;
+  j["jacobian_seconds"] = s.jacobianSeconds;
+  j["linear_solver_seconds"] = s.linearSolverSeconds;
+  j["max_violation"] = s.maxViolation;
+  j["worst_constraint"] = s.worstConstraint;
+  j["variables"] = problem.variables().size();
+  j["residual_blocks"] = problem.residuals().size();
+  json val;
+  val["dense_factor"] = v.denseFactor;
+  val["max_unactuated_residual_samples"] = v.maxUnactuatedResidualSamples;
+  val["max_unactuated_residual_dense"] = v.maxUnactuatedResidualDense;
+  val["worst_dense_time"] = v.worstDenseTime;
+  val["max_pin_error"] = v.maxPinError;
+  val["max_contact_slip"] = v.maxContactSlip;
+  val["max_contact_penetration"] = v.maxContactPenetration;
+  val["min_normal_force"] = v.minNormalForce;
+  val["max_friction_ratio"] = v.maxFrictionRatio;
+  val["contacts_push_only"] = v.contactsPushOnly;
+  val["contacts_in_friction_cone"] = v.contactsInFrictionCone;
+  val["max_clearance_violation"] = v.maxClearanceViolation;
+  val["max_rest_speed"] = v.maxRestSpeed;
+  val["max_forward_simulation_error"] = v.maxForwardSimulationError;
+  json flights = json::array();
+  for (const FlightCheck& f : v.flights)
+    flights.push_back({{"character", f.character},
+                       {"start", f.start},
+                       {"end", f.end},
+                       {"max_position_error", f.maxPositionError},
+                       {"max_root_lift", f.maxRootLift}});
+  val["flights"] = flights;
+  j["validity"] = val;
+  return j.dump(2) + "\n";
+}
+
+std::string motionJson(const Animation& animation) {
+  json j;
+  j["formatVersion"] = 1;
+  json chars = json::array();
+  for (const CharacterAnimation& c : animation.characters) {
+    json jc;
+    jc["name"] = c.name;
+    jc["urdf"] = c.name + ".urdf";
+    jc["gravity"] = vec3(c.gravity);
+    jc["dofs"] = c.dofs;
+    jc["actuated"] = c.actuated;
+    jc["times"] = c.times;
+    jc["q"] = rows(c.q);
+    jc["qd"] = rows(c.qd);
+    jc["qdd"] = rows(c.qdd);
+    jc["tau"] = rows(c.tau);
+    json contacts = json::array();
+    for (const ContactTrack& t : c.contacts) {
+      json jt;
+      jt["term"] = t.term;
+      jt["link"] = t.link;
+      jt["pointIndex"] = t.pointIndex;
+      json p = json::array(), f = json::array();
+      for (const auto& x : t.position) p.push_back(vec3(x));
+      for (const auto& x : t.force) f.push_back(vec3(x));
+      jt["point"] = p;
+      jt["force"] = f;
+      contacts.push_back(jt);
+    }
+    jc["contacts"] = contacts;
+    chars.push_back(jc);
+  }
+  j["characters"] = chars;
+  return j.dump() + "\n";
+}
+
+bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
+                       const ValidityReport& validity, double rateHz, const std::string& dir,
+                       std::string* error, std::string* warning) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    *error = "cannot create output directory " + dir + ": " + ec.message();
+    return false;
+  }
+  // Build every file's contents first, then write them; a failure names the file.
+  std::vector<std::pair<std::string, std::string>> files;
+  for (size_t c = 0; c < problem.characters().size(); ++c) {
+    const UrdfExport urdf = exportUrdf(*problem.characters()[c].model, problem.scene().characters[c]);
+    if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
+    files.emplace_back(dir + "/" + problem.characters()[c].model->name + ".urdf", urdf.xml);
+  }
+  files.emplace_back(dir + "/motion.json", motionJson(sampleAnimation(problem, rateHz)));
+  files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem));
+  for (const auto& [path, text] : files)
+    if (!writeFileAtomically(path, text, error)) return false;
+  return true;
+}
+
+}  // namespace spacetime

@@ -1,1 +1,501 @@
+// Assembly of the spacetime problem from a Scene (see spacetime_problem.h).
+#include "solver/spacetime_problem.h"
 
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "dynamics/algorithms.h"
+#include "dynamics/build_model.h"
+
+namespace spacetime {
+namespace {
+
+std::string at(const std::string& what, double t) {
+  std::ostringstream s;
+  s << what << " t=" << t;
+  return s.str();
+}
+
+// Times where an interval term is imposed: the samples inside it and its two ends.
+std::vector<double> intervalTimes(const Transcription& tr, double a, double b) {
+  std::vector<double> times = {a, b};
+  for (const Sample& s : tr.samplesIn(a, b))
+    if (std::abs(s.time - a) > 1e-9 && std::abs(s.time - b) > 1e-9) times.push_back(s.time);
+  std::sort(times.begin(), times.end());
+  return times;
+}
+
+}  // namespace
+
+SpacetimeProblem::SpacetimeProblem(const Scene& scene) : scene_(scene) {}
+
+std::unique_ptr<SpacetimeProblem> SpacetimeProblem::build(const Scene& scene, std::string* error) {
+  std::unique_ptr<SpacetimeProblem> p(new SpacetimeProblem(scene));
+  if (!p->assemble(error)) return nullptr;
+  return p;
+}
+
+std::vector<bool> SpacetimeProblem::activeContacts(int c, double t) const {
+  std::vector<bool> active;
+  for (const ContactVariables& ct : contacts_)
+    if (ct.character == c) active.push_back(t >= ct.start - 1e-9 && t <= ct.end + 1e-9);
+  return active;
+}
+
+std::vector<const DofGroup*> SpacetimeProblem::groupsAt(int c, double t) const {
+  const CharacterVariables& cv = characters_[c];
+  std::vector<const DofGroup*> out = {&cv.groups[0]};
+  const DofGroup* chosen = nullptr;
+  for (size_t i = 1; i < cv.groups.size(); ++i) {
+    const DofGroup& g = cv.groups[i];
+    if (t < g.start - 1e-9 || t > g.end + 1e-9) continue;
+    if (!chosen) chosen = &g;
+    else if (activeContacts(c, 0.5 * (g.start + g.end)) == activeContacts(c, t)) chosen = &g;
+  }
+  if (chosen) out.push_back(chosen);
+  return out;
+}
+
+void SpacetimeProblem::addGroupInputs(InputMap& in, int c, const DofGroup& g, double t, int order,
+                                      double scale) {
+  const int size = static_cast<int>(g.dofs.size());
+  if (size == 0) return;
+  const int row0 = in.rows() - characters_[c].dofs;  // rows were appended by the caller
+  const BSplineBasis b = g.spline.basis(t);
+  const auto& w = b.derivative(order);
+  for (int i = 0; i < 4; ++i) {
+    const int blk = in.block(x_.data() + g.offset + (b.first + i) * size, size);
+    for (int k = 0; k < size; ++k) in.add(row0 + g.dofs[k], blk, k, scale * w[i]);
+  }
+}
+
+void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order) {
+  in.newRows(characters_[c].dofs);
+  for (const DofGroup* g : groupsAt(c, t)) addGroupInputs(in, c, *g, t, order, 1.0);
+}
+
+int ContactVariables::sampleIndex(double t) const {
+  for (size_t i = 0; i < times.size(); ++i)
+    if (std::abs(times[i] - t) < 1e-9) return static_cast<int>(i);
+  return -1;
+}
+
+void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scale) {
+  const ContactVariables& cv = contacts_[j];
+  const int size = cv.blockSize();
+  const int row0 = in.newRows(size);
+  const int blk = in.block(x_.data() + cv.forceOffset + cv.sampleIndex(t) * size, size);
+  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale);
+}
+
+void SpacetimeProblem::addAnchorInputs(InputMap& in, int j) {
+  const ContactVariables& cv = contacts_[j];
+  const int size = 2 * static_cast<int>(cv.points.points.size());
+  const int row0 = in.newRows(size);
+  const int blk = in.block(x_.data() + cv.anchorOffset, size);
+  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, 1.0);
+}
+
+void SpacetimeProblem::addResidual(std::shared_ptr<const Kernel> kernel, const InputMap& inputs) {
+  if (kernel->rowCount() == 0) return;
+  const int first = static_cast<int>(al_.lambda.size());
+  al_.lambda.resize(first + kernel->rowCount(), 0.0);
+  auto* residual = new TermResidual(std::move(kernel), inputs, &al_, first);
+  problem_->AddResidualBlock(residual, nullptr, inputs.blocks());
+  residuals_.push_back(residual);
+}
+
+bool SpacetimeProblem::assemble(std::string* error) {
+  transcription_ = Transcription::fromScene(scene_);
+  const double gravity = scene_.gravity.norm();
+
+  // Variables: layout first (pointers into x_ must stay valid), then values.
+  int size = 0;
+  for (const CharacterSpec& spec : scene_.characters) {
+    CharacterVariables cv;
+    cv.model = std::make_shared<const Model<double>>(buildModel(spec, scene_.gravity));
+    cv.dofs = cv.model->dofCount();
+    cv.weight = cv.model->totalMass() * (gravity > 0 ? gravity : 1.0);
+    cv.forceDims = spec.root == RootKind::Planar ? 2 : 3;
+    if (cv.dofs == 0) {
+      *error = "character '" + spec.id + "' has no degrees of freedom: nothing to solve";
+      return false;
+    }
+    DofGroup actuated, unactuated;
+    for (int d = 0; d < cv.dofs; ++d)
+      (cv.model->bodies[cv.model->dofBody[d]].actuated ? actuated : unactuated).dofs.push_back(d);
+    actuated.spline = transcription_.motion;
+    actuated.start = scene_.startTime;
+    actuated.end = scene_.endTime;
+    cv.groups.push_back(actuated);
+    if (!unactuated.dofs.empty()) {
+      // Phase boundaries: contact starts and ends of this character inside the clip.
+      std::vector<double> edges = {scene_.startTime, scene_.endTime};
+      for (const TermSpec& t : scene_.terms)
+        if (t.enabled && t.kind == TermKind::Contact && t.character == spec.id)
+          for (double e : {t.start, t.end})
+            if (e > scene_.startTime + 1e-9 && e < scene_.endTime - 1e-9) edges.push_back(e);
+      std::sort(edges.begin(), edges.end());
+      edges.erase(std::unique(edges.begin(), edges.end(),
+                              [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+                  edges.end());
+      const double fineRate = scene_.transcription.controlPointsPerSecond *
+                              scene_.transcription.samplesPerSegment;
+      for (size_t e = 0; e + 1 < edges.size(); ++e) {
+        DofGroup phase = unactuated;
+        phase.start = edges[e];
+        phase.end = edges[e + 1];
+        phase.spline = UniformBSpline(phase.start, phase.end,
+                                      segmentsFor(phase.start, phase.end, fineRate));
+        cv.groups.push_back(phase);
+      }
+    }
+    for (DofGroup& g : cv.groups) {
+      g.offset = size;
+      size += static_cast<int>(g.dofs.size()) * g.spline.controlPointCount();
+    }
+    characters_.push_back(cv);
+  }
+  for (size_t ti = 0; ti < scene_.terms.size(); ++ti) {
+    const TermSpec& t = scene_.terms[ti];
+    if (!t.enabled || t.kind != TermKind::Contact) continue;
+    if (!scene_.groundEnabled) {
+      *error = "term '" + t.id + "': a contact needs the ground (ground.enabled is false)";
+      return false;
+    }
+    ContactVariables cv;
+    cv.term = static_cast<int>(ti);
+    for (size_t c = 0; c < scene_.characters.size(); ++c)
+      if (scene_.characters[c].id == t.character) cv.character = static_cast<int>(c);
+    const CharacterVariables& ch = characters_[cv.character];
+    cv.points.body = ch.model->bodyIndex(t.body);
+    cv.points.points = t.points;
+    cv.start = t.start;
+    cv.end = t.end;
+    cv.friction = t.friction;
+    cv.forceDims = ch.forceDims;
+    cv.times = intervalTimes(transcription_, t.start, t.end);
+    cv.forceOffset = size;
+    size += cv.blockSize() * static_cast<int>(cv.times.size());
+    cv.anchorOffset = size;
+    size += 2 * static_cast<int>(t.points.size());
+    contacts_.push_back(cv);
+  }
+  x_.assign(size, 0.0);
+  initialGuess();
+
+  ceres::Problem::Options options;
+  options.enable_fast_removal = false;
+  problem_ = std::make_unique<ceres::Problem>(options);
+
+  const ObjectiveSpec& obj = scene_.objective;
+  for (size_t c = 0; c < characters_.size(); ++c) {
+    const CharacterVariables& cv = characters_[c];
+    const int ci = static_cast<int>(c);
+    const std::string& name = scene_.characters[c].id;
+    const bool anyLimits = std::any_of(cv.model->bodies.begin(), cv.model->bodies.end(),
+                                       [](const Body<double>& b) { return b.hasPositionLimits; });
+    for (const Sample& s : transcription_.samples) {
+      // Contacts of this character active at this instant.
+      std::vector<int> active;
+      for (size_t j = 0; j < contacts_.size(); ++j)
+        if (contacts_[j].character == ci && s.time >= contacts_[j].start - 1e-12 &&
+            s.time <= contacts_[j].end + 1e-12)
+          active.push_back(static_cast<int>(j));
+      DynamicsKernel::Options o;
+      o.effortWeight = obj.effort * s.weight;
+      o.powerWeight = obj.power * s.weight;
+      o.weightScale = 1.0 / cv.weight;
+      std::vector<ContactPoints> cps;
+      InputMap in;
+      for (int order = 0; order < 3; ++order) addMotionInputs(in, ci, s.time, order);
+      for (int j : active) {
+        cps.push_back(contacts_[j].points);
+        addForceInputs(in, j, s.time);
+      }
+      addResidual(std::make_shared<DynamicsKernel>(cv.model, cps, cv.forceDims, o,
+                                                   at("dynamics " + name, s.time)),
+                  in);
+      if (obj.smoothness > 0 && s.weight > 0) {
+        InputMap sm;
+        addMotionInputs(sm, ci, s.time, obj.smoothnessOrder);
+        addResidual(std::make_shared<WeightedValueKernel>(cv.dofs, obj.smoothness * s.weight,
+                                                          at("smoothness " + name, s.time)),
+                    sm);
+      }
+      if (anyLimits) {
+        InputMap lim;
+        addMotionInputs(lim, ci, s.time, 0);
+        addResidual(std::make_shared<JointLimitKernel>(cv.model, at("joint limits " + name, s.time)),
+                    lim);
+      }
+    }
+  }
+
+  for (const TermSpec& t : scene_.terms) {
+    if (!t.enabled) continue;
+    int ci = 0;
+    for (size_t c = 0; c < scene_.characters.size(); ++c)
+      if (scene_.characters[c].id == t.character) ci = static_cast<int>(c);
+    const CharacterVariables& cv = characters_[ci];
+    const std::string label = toString(t.kind) + " '" + t.id + "'";
+    switch (t.kind) {
+      case TermKind::Keyframe: {
+        std::vector<std::pair<int, double>> targets;
+        for (const auto& [dof, value] : t.values) targets.emplace_back(cv.model->dofIndex(dof), value);
+        InputMap in;
+        addMotionInputs(in, ci, t.time, 0);
+        addResidual(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), in);
+        break;
+      }
+      case TermKind::Rest: {
+        InputMap in;
+        if (t.body.empty()) {
+          addMotionInputs(in, ci, t.time, 1);
+          std::vector<std::pair<int, double>> targets;
+          for (int d = 0; d < cv.dofs; ++d) targets.emplace_back(d, 0.0);
+          addResidual(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), in);
+        } else {
+          addMotionInputs(in, ci, t.time, 0);
+          addMotionInputs(in, ci, t.time, 1);
+          addResidual(std::make_shared<BodyRestKernel>(cv.model, cv.model->bodyIndex(t.body),
+                                                       at(label, t.time)),
+                      in);
+        }
+        break;
+      }
+      case TermKind::Pin: {
+        const std::vector<double> times =
+            t.until ? intervalTimes(transcription_, t.time, *t.until) : std::vector<double>{t.time};
+        for (double time : times) {
+          InputMap in;
+          addMotionInputs(in, ci, time, 0);
+          addResidual(std::make_shared<PinKernel>(cv.model, cv.model->bodyIndex(t.body), t.point,
+                                                  t.position, t.axes, at(label, time)),
+                      in);
+        }
+        break;
+      }
+      case TermKind::Clearance:
+        for (double time : intervalTimes(transcription_, t.start, t.end)) {
+          InputMap in;
+          addMotionInputs(in, ci, time, 0);
+          addResidual(std::make_shared<ClearanceKernel>(cv.model, cv.model->bodyIndex(t.body),
+                                                        t.point, t.height, at(label, time)),
+                      in);
+        }
+        break;
+      case TermKind::Contact: break;  // below, per contact variable set
+    }
+  }
+
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    const ContactVariables& ct = contacts_[j];
+    const int jj = static_cast<int>(j);
+    const CharacterVariables& cv = characters_[ct.character];
+    const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
+    for (double time : intervalTimes(transcription_, ct.start, ct.end)) {
+      InputMap in;
+      addMotionInputs(in, ct.character, time, 0);
+      addAnchorInputs(in, jj);
+      addResidual(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, scene_.groundHeight,
+                                                        at(label + " anchor", time)),
+                  in);
+    }
+    const int points = static_cast<int>(ct.points.points.size());
+    for (double time : ct.times) {
+      InputMap in;
+      addForceInputs(in, jj, time);
+      addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction,
+                                                       1.0 / cv.weight, at(label + " cone", time)),
+                  in);
+    }
+  }
+  // Continuity of the unactuated dofs' position and velocity across phase boundaries (their
+  // acceleration may jump there, as the contact force does).
+  for (size_t c = 0; c < characters_.size(); ++c) {
+    const CharacterVariables& cv = characters_[c];
+    for (size_t i = 2; i < cv.groups.size(); ++i) {
+      const DofGroup& left = cv.groups[i - 1];
+      const DofGroup& right = cv.groups[i];
+      for (int order = 0; order < 2; ++order) {
+        InputMap in;
+        in.newRows(cv.dofs);
+        addGroupInputs(in, static_cast<int>(c), left, right.start, order, 1.0);
+        addGroupInputs(in, static_cast<int>(c), right, right.start, order, -1.0);
+        std::vector<std::pair<int, double>> zero;
+        for (int d : right.dofs) zero.emplace_back(d, 0.0);
+        addResidual(std::make_shared<TargetKernel>(
+                        cv.dofs, zero,
+                        at(std::string(order ? "velocity" : "position") + " continuity " +
+                               scene_.characters[c].id,
+                           right.start)),
+                    in);
+      }
+    }
+  }
+  return true;
+}
+
+void SpacetimeProblem::initialGuess() {
+  // Joint trajectories: piecewise-linear through the keyframes of each dof (held outside them),
+  // fitted by the spline; dofs without keyframes stay at zero, as the seed started. The root's
+  // dofs are interpolated in "flight time", which stands still while a contact holds the
+  // character, and the root's vertical translation follows the ballistic arc of each flight
+  // phase: a guess that already respects the contact schedule and gravity.
+  const UniformBSpline& spline = transcription_.motion;
+  const double g = scene_.gravity.norm();
+  for (size_t c = 0; c < characters_.size(); ++c) {
+    const CharacterVariables& cv = characters_[c];
+    const std::string& id = scene_.characters[c].id;
+    std::vector<std::pair<double, double>> holds;  // contact intervals of this character
+    for (const ContactVariables& ct : contacts_)
+      if (ct.character == static_cast<int>(c)) holds.emplace_back(ct.start, ct.end);
+    auto flightTime = [&](double t) {
+      double held = 0;
+      for (double s = spline.start(); s < t;) {  // measure of held time in [start, t]
+        double next = t;
+        bool inHold = false;
+        for (const auto& [a, b] : holds)
+          if (s >= a && s < b) {
+            inHold = true;
+            next = std::min(next, b);
+          } else if (a > s) {
+            next = std::min(next, a);
+          }
+        if (inHold) held += next - s;
+        s = next;
+      }
+      return t - spline.start() - held;
+    };
+    std::vector<std::vector<std::pair<double, double>>> keys(cv.dofs);
+    for (const TermSpec& t : scene_.terms)
+      if (t.enabled && t.kind == TermKind::Keyframe && t.character == id)
+        for (const auto& [dof, v] : t.values) keys[cv.model->dofIndex(dof)].emplace_back(t.time, v);
+    std::vector<double> times;
+    const int n = 20 * spline.segmentCount();
+    for (int i = 0; i <= n; ++i) times.push_back(spline.start() + (spline.end() - spline.start()) * i / n);
+    Eigen::MatrixXd values = Eigen::MatrixXd::Zero(times.size(), cv.dofs);
+    for (int d = 0; d < cv.dofs; ++d) {
+      const Body<double>& body = cv.model->bodies[cv.model->dofBody[d]];
+      const bool rootDof = body.isVirtual || body.parent < 0 ||
+                           cv.model->bodies[body.parent].isVirtual;
+      const bool useFlightTime = rootDof && !holds.empty();
+      auto& k = keys[d];
+      for (auto& [time, v] : k) time = useFlightTime ? flightTime(time) : time;
+      std::sort(k.begin(), k.end());
+      const bool vertical = rootDof && body.joint.type == JointType::Prismatic && g > 0 &&
+                            std::abs(body.joint.axis.dot(scene_.gravity) / g) > 0.999;
+      for (size_t i = 0; i < times.size(); ++i) {
+        const double t = useFlightTime ? flightTime(times[i]) : times[i];
+        double v = 0;
+        if (k.empty()) v = 0;
+        else if (t <= k.front().first) v = k.front().second;
+        else if (t >= k.back().first) v = k.back().second;
+        else
+          for (size_t s = 0; s + 1 < k.size(); ++s)
+            if (t >= k[s].first && t <= k[s + 1].first) {
+              const double a = (t - k[s].first) / std::max(1e-12, k[s + 1].first - k[s].first);
+              v = (1 - a) * k[s].second + a * k[s + 1].second;
+              break;
+            }
+        if (vertical) {
+          // Ballistic height g (t - a)(b - t) / 2 over each flight phase [a, b] between holds.
+          std::vector<double> edges = {spline.start()};
+          for (const auto& [a, b] : holds) edges.push_back(a), edges.push_back(b);
+          edges.push_back(spline.end());
+          std::sort(edges.begin(), edges.end());
+          const double tt = times[i];
+          for (size_t e = 0; e + 1 < edges.size(); ++e) {
+            const double a = edges[e], b = edges[e + 1];
+            if (tt <= a || tt >= b || b - a < 1e-9) continue;
+            bool held = false;
+            for (const auto& [ha, hb] : holds) held = held || (tt > ha && tt < hb);
+            if (!held) v += body.joint.axis.dot(-scene_.gravity) / g * g * (tt - a) * (b - tt) / 2;
+          }
+        }
+        values(i, d) = v;
+      }
+    }
+    for (const DofGroup& grp : cv.groups) {
+      const int size = static_cast<int>(grp.dofs.size());
+      if (size == 0) continue;
+      std::vector<double> groupTimes;
+      std::vector<int> rows;
+      for (size_t i = 0; i < times.size(); ++i)
+        if (times[i] >= grp.start - 1e-9 && times[i] <= grp.end + 1e-9) {
+          groupTimes.push_back(times[i]);
+          rows.push_back(static_cast<int>(i));
+        }
+      Eigen::MatrixXd groupValues(rows.size(), size);
+      for (size_t r = 0; r < rows.size(); ++r)
+        for (int k = 0; k < size; ++k) groupValues(r, k) = values(rows[r], grp.dofs[k]);
+      const Eigen::MatrixXd ctrl = grp.spline.fit(groupTimes, groupValues);
+      for (int k = 0; k < grp.spline.controlPointCount(); ++k)
+        for (int d = 0; d < size; ++d) x_[grp.offset + k * size + d] = ctrl(k, d);
+    }
+  }
+  // Contact forces: the weight shared among the contact's points; anchors under the points.
+  for (const ContactVariables& ct : contacts_) {
+    const CharacterVariables& cv = characters_[ct.character];
+    const int points = static_cast<int>(ct.points.points.size());
+    for (size_t k = 0; k < ct.times.size(); ++k)
+      for (int p = 0; p < points; ++p)
+        x_[ct.forceOffset + k * ct.blockSize() + p * ct.forceDims + 1] = cv.weight / points;
+    const Eigen::VectorXd q = jointState(ct.character, ct.start, 0);
+    Data<double> data(*cv.model);
+    forwardKinematics(*cv.model, data, q.data());
+    for (int p = 0; p < points; ++p) {
+      const Eigen::Vector3d w = pointPosition(data, ct.points.body, ct.points.points[p]);
+      x_[ct.anchorOffset + 2 * p] = w.x();
+      x_[ct.anchorOffset + 2 * p + 1] = w.z();
+    }
+  }
+}
+
+Eigen::VectorXd SpacetimeProblem::jointState(int c, double t, int order) const {
+  const CharacterVariables& cv = characters_[c];
+  Eigen::VectorXd out(cv.dofs);
+  for (const DofGroup* gp : groupsAt(c, t)) {
+    const DofGroup& g = *gp;
+    const int size = static_cast<int>(g.dofs.size());
+    if (size == 0) continue;
+    const BSplineBasis b = g.spline.basis(t);
+    const auto& w = b.derivative(order);
+    for (int k = 0; k < size; ++k) {
+      double v = 0;
+      for (int i = 0; i < 4; ++i) v += w[i] * x_[g.offset + (b.first + i) * size + k];
+      out[g.dofs[k]] = v;
+    }
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) const {
+  const ContactVariables& ct = contacts_[j];
+  const int points = static_cast<int>(ct.points.points.size());
+  std::vector<Eigen::Vector3d> out(points, Eigen::Vector3d::Zero());
+  if (ct.times.empty() || t < ct.times.front() - 1e-12 || t > ct.times.back() + 1e-12) return out;
+  // Linear interpolation between the samples around t.
+  size_t i = 0;
+  while (i + 2 < ct.times.size() && t > ct.times[i + 1]) ++i;
+  const double span = ct.times.size() > 1 ? ct.times[i + 1] - ct.times[i] : 1.0;
+  const double a = ct.times.size() > 1 ? std::clamp((t - ct.times[i]) / span, 0.0, 1.0) : 0.0;
+  const size_t i1 = std::min(i + 1, ct.times.size() - 1);
+  for (int p = 0; p < points; ++p)
+    for (int k = 0; k < ct.forceDims; ++k)
+      out[p][k] = (1 - a) * x_[ct.forceOffset + i * ct.blockSize() + p * ct.forceDims + k] +
+                  a * x_[ct.forceOffset + i1 * ct.blockSize() + p * ct.forceDims + k];
+  return out;
+}
+
+bool SpacetimeProblem::restore(const SolutionState& s) {
+  if (s.variables.size() != x_.size() || s.multipliers.size() != al_.lambda.size()) return false;
+  std::copy(s.variables.begin(), s.variables.end(), x_.begin());  // parameter blocks point into x_
+  al_.lambda = s.multipliers;
+  if (s.rho > 0) al_.rho = s.rho;
+  return true;
+}
+
+}  // namespace spacetime

@@ -1,1 +1,69 @@
+// Collocation grid and quadrature (see transcription.h).
+#include "solver/transcription.h"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+namespace spacetime {
+
+int segmentsFor(double t0, double t1, double rate) {
+  return std::max(1, static_cast<int>(std::lround((t1 - t0) * rate)));
+}
+
+void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
+  // Golub-Welsch: the nodes are the eigenvalues of the Jacobi matrix of the Legendre
+  // recurrence, the weights 2 v0^2 from the first components of its eigenvectors.
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+  nodes->resize(n);
+  weights->resize(n);
+  for (int i = 0; i < n; ++i) {
+    (*nodes)[i] = es.eigenvalues()[i];
+    (*weights)[i] = 2 * es.eigenvectors()(0, i) * es.eigenvectors()(0, i);
+  }
+}
+
+Transcription Transcription::fromScene(const Scene& scene) {
+  Transcription tr;
+  const double t0 = scene.startTime, t1 = scene.endTime;
+  tr.motion = UniformBSpline(t0, t1, segmentsFor(t0, t1, scene.transcription.controlPointsPerSecond));
+  std::vector<double> x, w;
+  gaussLegendre(scene.transcription.samplesPerSegment, &x, &w);
+  const double h = tr.motion.knotSpacing();
+  for (int s = 0; s < tr.motion.segmentCount(); ++s)
+    for (size_t i = 0; i < x.size(); ++i)
+      tr.samples.push_back({t0 + h * (s + 0.5 * (x[i] + 1)), 0.5 * h * w[i]});
+  std::vector<double> extra = {t0, t1};
+  for (const TermSpec& t : scene.terms)
+    if (t.enabled && t.kind == TermKind::Contact) {
+      extra.push_back(t.start);
+      extra.push_back(t.end);
+    }
+  for (double e : extra) {
+    const bool present = std::any_of(tr.samples.begin(), tr.samples.end(),
+                                     [&](const Sample& s) { return std::abs(s.time - e) < 1e-9; });
+    if (!present) tr.samples.push_back({e, 0.0});
+  }
+  std::sort(tr.samples.begin(), tr.samples.end(),
+            [](const Sample& a, const Sample& b) { return a.time < b.time; });
+  return tr;
+}
+
+std::vector<Sample> Transcription::samplesIn(double t0, double t1) const {
+  std::vector<Sample> out;
+  for (const Sample& s : samples)
+    if (s.time >= t0 - 1e-9 && s.time <= t1 + 1e-9) out.push_back(s);
+  return out;
+}
+
+std::vector<double> Transcription::denseGrid(int factor) const {
+  const int n = static_cast<int>(samples.size()) * factor;
+  std::vector<double> grid(n + 1);
+  for (int i = 0; i <= n; ++i)
+    grid[i] = motion.start() + (motion.end() - motion.start()) * i / n;
+  return grid;
+}
+
+}  // namespace spacetime

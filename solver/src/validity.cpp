@@ -1,1 +1,189 @@
+// Validity checks on a dense grid and by forward simulation (see validity.h).
+#include "solver/validity.h"
 
+#include <algorithm>
+#include <cmath>
+
+#include "dynamics/algorithms.h"
+#include "solver/animation.h"
+
+namespace spacetime {
+namespace {
+
+double unactuatedResidual(const SpacetimeProblem& problem, int c, double t) {
+  const CharacterVariables& cv = problem.characters()[c];
+  const Eigen::VectorXd tau = generalizedForcesAt(problem, c, t);
+  double worst = 0;
+  for (int d = 0; d < cv.dofs; ++d)
+    if (!cv.model->bodies[cv.model->dofBody[d]].actuated) worst = std::max(worst, std::abs(tau[d]));
+  return worst / cv.weight;
+}
+
+// Integrates q'' = ABA(q, q', tau_actuated(t)) with classical RK4 from the solution's state at
+// t0, and returns the largest deviation from the solution's q over [t0, t1].
+double forwardSimulationError(const SpacetimeProblem& problem, int c, double t0, double t1) {
+  const Model<double>& model = *problem.characters()[c].model;
+  const int n = model.dofCount();
+  Data<double> data(model);
+  auto torque = [&](double t) {
+    Eigen::VectorXd tau = generalizedForcesAt(problem, c, t);
+    for (int d = 0; d < n; ++d)
+      if (!model.bodies[model.dofBody[d]].actuated) tau[d] = 0;
+    return tau;
+  };
+  auto accel = [&](double t, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    const Eigen::VectorXd tau = torque(t);
+    return aba(model, data, q.data(), qd.data(), tau.data(), contactPointForcesAt(problem, c, t));
+  };
+  const int steps = std::max(10, static_cast<int>(std::ceil((t1 - t0) / 5e-4)));
+  const double h = (t1 - t0) / steps;
+  Eigen::VectorXd q = problem.jointState(c, t0, 0), qd = problem.jointState(c, t0, 1);
+  double worst = 0;
+  for (int s = 0; s < steps; ++s) {
+    const double t = t0 + s * h;
+    const Eigen::VectorXd k1v = qd, k1a = accel(t, q, qd);
+    const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(t + 0.5 * h, q + 0.5 * h * k1v, k2v);
+    const Eigen::VectorXd k3v = qd + 0.5 * h * k2a, k3a = accel(t + 0.5 * h, q + 0.5 * h * k2v, k3v);
+    const Eigen::VectorXd k4v = qd + h * k3a, k4a = accel(t + h, q + h * k3v, k4v);
+    q += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+    qd += h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
+    worst = std::max(worst, (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+}  // namespace
+
+ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
+  ValidityReport r;
+  r.denseFactor = denseFactor;
+  const Scene& scene = problem.scene();
+  const Transcription& tr = problem.transcription();
+  const std::vector<double> dense = tr.denseGrid(denseFactor);
+  r.minNormalForce = problem.contacts().empty() ? 0 : 1e300;
+  for (size_t c = 0; c < problem.characters().size(); ++c) {
+    const int ci = static_cast<int>(c);
+    for (const Sample& s : tr.samples)
+      r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples, unactuatedResidual(problem, ci, s.time));
+    for (double t : dense) {
+      const double v = unactuatedResidual(problem, ci, t);
+      if (v > r.maxUnactuatedResidualDense) {
+        r.maxUnactuatedResidualDense = v;
+        r.worstDenseTime = t;
+      }
+    }
+  }
+  auto characterIndex = [&](const std::string& id) {
+    for (size_t c = 0; c < scene.characters.size(); ++c)
+      if (scene.characters[c].id == id) return static_cast<int>(c);
+    return 0;
+  };
+  for (const TermSpec& t : scene.terms) {
+    if (!t.enabled) continue;
+    const int c = characterIndex(t.character);
+    const Model<double>& model = *problem.characters()[c].model;
+    Data<double> data(model);
+    auto pointAt = [&](double time, const Eigen::Vector3d& p) {
+      const Eigen::VectorXd q = problem.jointState(c, time, 0);
+      forwardKinematics(model, data, q.data());
+      return pointPosition(data, model.bodyIndex(t.body), p);
+    };
+    switch (t.kind) {
+      case TermKind::Pin: {
+        std::vector<double> times = {t.time};
+        if (t.until)
+          for (double s : dense)
+            if (s >= t.time && s <= *t.until) times.push_back(s);
+        for (double s : times) {
+          const Eigen::Vector3d p = pointAt(s, t.point);
+          for (int a = 0; a < 3; ++a)
+            if (t.axes[a]) r.maxPinError = std::max(r.maxPinError, std::abs(p[a] - t.position[a]));
+        }
+        break;
+      }
+      case TermKind::Rest:
+        r.maxRestSpeed = std::max(r.maxRestSpeed, problem.jointState(c, t.time, 1).cwiseAbs().maxCoeff());
+        break;
+      case TermKind::Clearance:
+        for (double s : dense)
+          if (s >= t.start && s <= t.end)
+            r.maxClearanceViolation = std::max(r.maxClearanceViolation, t.height - pointAt(s, t.point).y());
+        break;
+      default: break;
+    }
+  }
+  for (size_t j = 0; j < problem.contacts().size(); ++j) {
+    const ContactVariables& ct = problem.contacts()[j];
+    const Model<double>& model = *problem.characters()[ct.character].model;
+    Data<double> data(model);
+    const std::vector<Eigen::Vector3d> anchors = [&] {
+      const Eigen::VectorXd q = problem.jointState(ct.character, ct.start, 0);
+      forwardKinematics(model, data, q.data());
+      std::vector<Eigen::Vector3d> a;
+      for (const auto& p : ct.points.points) a.push_back(pointPosition(data, ct.points.body, p));
+      return a;
+    }();
+    for (double s : dense) {
+      if (s < ct.start || s > ct.end) continue;
+      const Eigen::VectorXd q = problem.jointState(ct.character, s, 0);
+      forwardKinematics(model, data, q.data());
+      const std::vector<Eigen::Vector3d> f = problem.contactForces(static_cast<int>(j), s);
+      for (size_t p = 0; p < ct.points.points.size(); ++p) {
+        const Eigen::Vector3d w = pointPosition(data, ct.points.body, ct.points.points[p]);
+        r.maxContactSlip = std::max(r.maxContactSlip, std::hypot(w.x() - anchors[p].x(), w.z() - anchors[p].z()));
+        r.maxContactPenetration = std::max(r.maxContactPenetration, scene.groundHeight - w.y());
+        r.minNormalForce = std::min(r.minNormalForce, f[p].y());
+        const double tangential = std::hypot(f[p].x(), f[p].z());
+        if (f[p].y() > 1e-9) r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));
+        else if (tangential > 1e-6) r.maxFrictionRatio = std::max(r.maxFrictionRatio, 1e9);
+      }
+    }
+  }
+  if (!problem.contacts().empty()) {
+    const double tol = 1e-6;
+    r.contactsPushOnly = r.minNormalForce >= -tol * problem.characters()[0].weight;
+    r.contactsInFrictionCone = r.maxFrictionRatio <= 1 + 1e-6;
+  }
+  // Flight phases: maximal intervals in which a character that has contacts touches nothing.
+  for (size_t c = 0; c < problem.characters().size(); ++c) {
+    std::vector<std::pair<double, double>> holds;
+    std::vector<const ContactVariables*> mine;
+    for (const ContactVariables& ct : problem.contacts())
+      if (ct.character == static_cast<int>(c)) {
+        holds.emplace_back(ct.start, ct.end);
+        mine.push_back(&ct);
+      }
+    if (holds.empty()) continue;
+    std::sort(holds.begin(), holds.end());
+    std::vector<std::pair<double, double>> flights;
+    double cursor = scene.startTime;
+    for (const auto& [a, b] : holds) {
+      if (a > cursor + 1e-9) flights.emplace_back(cursor, a);
+      cursor = std::max(cursor, b);
+    }
+    if (scene.endTime > cursor + 1e-9) flights.emplace_back(cursor, scene.endTime);
+    const Model<double>& model = *problem.characters()[c].model;
+    Data<double> data(model);
+    for (const auto& [a, b] : flights) {
+      FlightCheck fc;
+      fc.character = model.name;
+      fc.start = a;
+      fc.end = b;
+      fc.maxPositionError = forwardSimulationError(problem, static_cast<int>(c), a, b);
+      for (double s : dense) {
+        if (s < a || s > b) continue;
+        const Eigen::VectorXd q = problem.jointState(static_cast<int>(c), s, 0);
+        forwardKinematics(model, data, q.data());
+        double lowest = 1e300;
+        for (const ContactVariables* ct : mine)
+          for (const auto& p : ct->points.points) lowest = std::min(lowest, pointPosition(data, ct->points.body, p).y());
+        fc.maxRootLift = std::max(fc.maxRootLift, lowest - scene.groundHeight);
+      }
+      r.maxForwardSimulationError = std::max(r.maxForwardSimulationError, fc.maxPositionError);
+      r.flights.push_back(fc);
+    }
+  }
+  return r;
+}
+
+}  // namespace spacetime

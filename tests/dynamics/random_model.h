@@ -15,7 +15,8 @@ inline Eigen::Vector3d randomVec(std::mt19937& rng, double s = 1.0) {
 }
 
 inline CharacterSpec randomCharacter(std::mt19937& rng, int bodies, RootKind root,
-                                     bool allowHelical = true) {
+                                     bool allowHelical = true, bool rotatedInertia = true,
+                                     bool allowFixed = true) {
   std::uniform_real_distribution<double> u(0.2, 2.0);
   CharacterSpec c;
   c.id = "random";
@@ -29,7 +30,7 @@ inline CharacterSpec randomCharacter(std::mt19937& rng, int bodies, RootKind roo
       const int k = std::uniform_int_distribution<int>(0, kinds - 1)(rng);
       b.joint.kind = k == 0 ? JointKind::Revolute
                      : k == 1 ? JointKind::Prismatic
-                     : k == 2 ? (i % 3 == 0 ? JointKind::Fixed : JointKind::Revolute)
+                     : k == 2 ? (i % 3 == 0 && allowFixed ? JointKind::Fixed : JointKind::Revolute)
                               : JointKind::Helical;
       b.joint.id = "j" + std::to_string(i);
       b.joint.axis = randomVec(rng).normalized();
@@ -39,14 +40,12 @@ inline CharacterSpec randomCharacter(std::mt19937& rng, int bodies, RootKind roo
     }
     b.mass = u(rng);
     b.com = randomVec(rng, 0.3);
-    Eigen::Matrix3d R = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
-    (void)R;
-    const Eigen::Vector3d d(u(rng) * 0.1, u(rng) * 0.1, u(rng) * 0.1);
-    Eigen::Vector3d p = d;
-    // Principal moments must satisfy the triangle inequality.
-    p.z() = std::min(p.z(), p.x() + p.y() - 1e-3);
+    // Principal moments (b+c, a+c, a+b) of a positive mass spread always satisfy the triangle
+    // inequality, as any physical body does.
+    const Eigen::Vector3d spread(u(rng) * 0.05, u(rng) * 0.05, u(rng) * 0.05);
+    const Eigen::Vector3d p(spread.y() + spread.z(), spread.x() + spread.z(), spread.x() + spread.y());
     const Eigen::Quaterniond qr(Eigen::AngleAxisd(u(rng), randomVec(rng).normalized()));
-    b.inertia = qr.toRotationMatrix() * p.asDiagonal() * qr.toRotationMatrix().transpose();
+    b.inertia = rotatedInertia ? Eigen::Matrix3d(qr.toRotationMatrix() * p.asDiagonal() * qr.toRotationMatrix().transpose()) : Eigen::Matrix3d(p.asDiagonal());
     c.bodies.push_back(b);
   }
   return c;

@@ -54,6 +54,17 @@ void forwardSweep(const Model<S>& model, Data<T>& d, const T* q, const T* qd, co
     }
   }
 }
+// A point force as a spatial force in body coordinates (after the forward sweep).
+template <class T>
+Force<T> bodyForce(const Data<T>& d, const PointForce<T>& pf) {
+  const Transform<T>& X = d.X_world[pf.body];
+  if (pf.pointIsLocal) {
+    const Vec3<T> F = X.E * pf.forceWorld;
+    return Force<T>(pf.pointWorld.cross(F), F);
+  }
+  // As a spatial force about the world origin, then in body coordinates.
+  return X.apply(Force<T>(pf.pointWorld.cross(pf.forceWorld), pf.forceWorld));
+}
 }  // namespace detail
 
 // Body poses only.
@@ -113,11 +124,7 @@ const VecX<T>& rnea(const Model<S>& model, Data<T>& d, const T* q, const T* qd, 
     }
     d.f[i] = multiply(I, d.a[i]) + crossForce(d.v[i], multiply(I, d.v[i]));
   }
-  for (const PointForce<T>& pf : fext) {
-    // The force as a spatial force about the world origin, then in body coordinates.
-    const Force<T> fw(pf.pointWorld.cross(pf.forceWorld), pf.forceWorld);
-    d.f[pf.body] -= d.X_world[pf.body].apply(fw);
-  }
+  for (const PointForce<T>& pf : fext) d.f[pf.body] -= detail::bodyForce(d, pf);
   for (int i = model.bodyCount() - 1; i >= 0; --i) {
     const Body<S>& b = model.bodies[i];
     if (b.dofIndex >= 0) {
@@ -184,10 +191,7 @@ VecX<T> aba(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T*
     const Vec6<T> Iv = I * v;
     pA[i] = crossForce(d.v[i], Force<T>(Iv.template head<3>(), Iv.template tail<3>())).vector();
   }
-  for (const PointForce<T>& pf : fext) {
-    const Force<T> fw(pf.pointWorld.cross(pf.forceWorld), pf.forceWorld);
-    pA[pf.body] -= d.X_world[pf.body].apply(fw).vector();
-  }
+  for (const PointForce<T>& pf : fext) pA[pf.body] -= detail::bodyForce(d, pf).vector();
   for (int i = nb - 1; i >= 0; --i) {
     const Body<S>& b = model.bodies[i];
     // I^a = I^A - U D^-1 U^T and p^a = p^A + I^a c + U D^-1 u (RBDA Table 7.1).

@@ -157,11 +157,14 @@ struct Model {
 };
 
 // A force applied at a world point on a body (a ground contact force), in world coordinates.
+// The point is given in world coordinates, or (pointIsLocal) in body coordinates, which lets
+// the solver apply a force at a body-fixed contact point without a separate kinematics pass.
 template <class T>
 struct PointForce {
   int body = -1;
   Vec3<T> pointWorld = Vec3<T>::Zero();
   Vec3<T> forceWorld = Vec3<T>::Zero();
+  bool pointIsLocal = false;
 };
 
 // Per-evaluation workspace. Body quantities are in body coordinates.

@@ -1,0 +1,47 @@
+// Animation: a solved motion sampled on a uniform time grid - joint positions, velocities,
+// accelerations, the generalized forces the dynamics give (unactuated entries are the physics
+// residual) and every contact point's world position and force. A plain value the exporters,
+// plots and viewport read.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "solver/spacetime_problem.h"
+
+namespace spacetime {
+
+struct ContactTrack {
+  std::string term;   // the contact term's id
+  std::string link;   // body id
+  int pointIndex = 0;
+  std::vector<Eigen::Vector3d> position, force;  // world, one per frame
+};
+
+struct CharacterAnimation {
+  std::string name;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  std::vector<std::string> dofs;
+  std::vector<bool> actuated;
+  std::vector<double> times;
+  Eigen::MatrixXd q, qd, qdd, tau;  // frames x dofs
+  std::vector<ContactTrack> contacts;
+};
+
+struct Animation {
+  std::vector<CharacterAnimation> characters;
+};
+
+// Samples the problem's current solution at `rateHz` frames per second (both ends included).
+Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz);
+
+// The generalized forces of character c at time t from the solution's motion and contact
+// forces (RNEA with the contacts as external point forces).
+Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t);
+
+// The contact point forces acting on character c at time t.
+std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
+                                                     double t);
+
+}  // namespace spacetime

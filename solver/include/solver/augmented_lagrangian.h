@@ -1,0 +1,76 @@
+// The default solver: an augmented-Lagrangian method (Nocedal & Wright, Algorithm 17.4, with
+// the Powell-Hestenes-Rockafellar treatment of inequalities) whose inner minimisations are
+// Ceres Levenberg-Marquardt solves with exact Jacobians and a sparse Cholesky factorisation of
+// the banded normal equations.
+//
+// Options and Summary follow Ceres: every knob has a default and a comment, validate() says
+// what is wrong instead of crashing, and every run ends in a Summary that says why it stopped.
+// The solver never throws on a diverging problem: it stops, says why, and leaves the last good
+// iterate in the problem.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <string>
+
+#include "solver/spacetime_problem.h"
+
+namespace spacetime {
+
+struct SolverOptions {
+  int maxOuterIterations = 30;   // multiplier updates
+  int maxInnerIterations = 60;   // Levenberg-Marquardt iterations per outer iteration
+  int maxProjectionIterations = 50;  // Gauss-Newton iterations of the final projection
+  double tolerance = 1e-7;       // largest constraint row (metres, radians, fraction of weight)
+  double initialPenalty = 100;   // rho at a cold start
+  double penaltyGrowth = 10;     // rho *= growth when the violation did not shrink enough
+  double maxPenalty = 1e10;
+  double maxSeconds = 300;       // wall-clock budget of the whole solve
+  int threads = 1;               // Ceres evaluation threads
+  bool warmStart = false;        // keep the problem's current multipliers and penalty
+
+  std::string validate() const;  // empty if valid, else what is wrong
+};
+
+struct IterationReport {
+  int outer = 0;
+  int iterations = 0;       // Levenberg-Marquardt iterations so far
+  double objective = 0;
+  double maxViolation = 0;  // of the current iterate
+  double rho = 0;
+};
+
+enum class SolveStatus { Converged, IterationLimit, TimeLimit, Cancelled, NumericalFailure, InvalidOptions };
+
+struct SolverSummary {
+  SolveStatus status = SolveStatus::InvalidOptions;
+  bool converged = false;
+  std::string reason;
+  double objective = 0;
+  double maxViolation = 0;
+  std::string worstConstraint;  // label of the most violated row
+  int outerIterations = 0;
+  int iterations = 0;           // total Levenberg-Marquardt iterations
+  double solveSeconds = 0;
+  double jacobianSeconds = 0;   // Ceres's time in residual and Jacobian evaluation
+  double linearSolverSeconds = 0;
+};
+
+// Called after every inner iteration (from the solving thread). Return false to cancel.
+using ProgressCallback = std::function<bool(const IterationReport&)>;
+
+SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
+                             const ProgressCallback& callback = nullptr,
+                             const std::atomic<bool>* cancel = nullptr);
+
+// Objective value and largest violation of the problem's current variables.
+struct ProblemMeasures {
+  double objective = 0;
+  double maxViolation = 0;
+  std::string worstConstraint;
+};
+ProblemMeasures measure(const SpacetimeProblem& problem);
+
+std::string toString(SolveStatus s);
+
+}  // namespace spacetime

@@ -1,0 +1,182 @@
+// Term kernels: the per-sample functions a spacetime problem is made of.
+//
+// A kernel maps a small input vector z (a sample's joint positions, velocities, accelerations,
+// contact forces, anchors - whatever it declares) to a few rows, each tagged as part of the
+// objective (a least-squares residual), an equality (= 0) or an inequality (<= 0). Kernels are
+// templates on the scalar; derivatives come from Jets through the templated dynamics, seeded on
+// z in chunks of kJetWidth. The map from the optimisation variables (spline control points) to
+// z is linear and lives in TermResidual, so kernels never see splines.
+#pragma once
+
+#include <ceres/jet.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dynamics/model.h"
+
+namespace spacetime {
+
+inline constexpr int kJetWidth = 12;
+using JetChunk = ceres::Jet<double, kJetWidth>;
+
+enum class RowKind : unsigned char { Objective, Equality, Inequality };
+
+class Kernel {
+ public:
+  virtual ~Kernel() = default;
+  int inputSize() const { return inputs_; }
+  int rowCount() const { return static_cast<int>(kinds_.size()); }
+  const std::vector<RowKind>& rowKinds() const { return kinds_; }
+  const std::string& label() const { return label_; }
+
+  virtual void evaluate(const double* z, double* rows) const = 0;
+  virtual void evaluate(const JetChunk* z, JetChunk* rows) const = 0;
+  // Rows and their row-major Jacobian (rowCount x inputSize) with respect to z.
+  void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const;
+
+ protected:
+  int inputs_ = 0;
+  std::vector<RowKind> kinds_;
+  std::string label_;
+};
+
+#define SPACETIME_KERNEL_EVALUATORS                                       \
+  void evaluate(const double* z, double* rows) const override;          \
+  void evaluate(const JetChunk* z, JetChunk* rows) const override;      \
+  template <class T>                                                    \
+  void compute(const T* z, T* rows) const;
+
+// The contact points of one contact term as the dynamics kernel sees them.
+struct ContactPoints {
+  int body = -1;
+  std::vector<Eigen::Vector3d> points;  // body frame
+};
+
+// Inverse dynamics at a sample. z = [q, qd, qdd, f_1 .. f_m] (each contact's points' forces,
+// forceDims components each: x, y or x, y, z in world axes). Rows: the unactuated generalized
+// forces divided by the character's weight (equalities: physics); sqrt(w_effort * dt) tau for
+// actuated dofs (objective); sqrt(w_power * dt) tau qd (objective); torque limits (inequalities).
+class DynamicsKernel : public Kernel {
+ public:
+  struct Options {
+    bool physics = true;
+    double effortWeight = 0;  // already multiplied by the quadrature weight
+    double powerWeight = 0;
+    bool torqueLimits = true;
+    double weightScale = 1;   // 1 / (m g): unactuated rows become fractions of the weight
+  };
+  DynamicsKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
+                 int forceDims, const Options& options, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  enum class Row { Physics, Effort, Power, TorqueUpper, TorqueLower };
+  std::shared_ptr<const Model<double>> model_;
+  std::vector<ContactPoints> contacts_;
+  int forceDims_;
+  Options options_;
+  std::vector<std::pair<Row, int>> rows_;  // kind and dof
+};
+
+// sqrt(weight) * z: a smoothness integrand (z = a derivative of q) or any quadratic penalty.
+class WeightedValueKernel : public Kernel {
+ public:
+  WeightedValueKernel(int size, double weight, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  double sqrtWeight_;
+};
+
+// z_i - target_i = 0 for chosen entries (keyframes: z = q; joint-space rest: z = qd).
+class TargetKernel : public Kernel {
+ public:
+  TargetKernel(int size, std::vector<std::pair<int, double>> targets, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::vector<std::pair<int, double>> targets_;
+};
+
+// A body's spatial velocity is zero. z = [q, qd]; six rows.
+class BodyRestKernel : public Kernel {
+ public:
+  BodyRestKernel(std::shared_ptr<const Model<double>> model, int body, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  int body_;
+};
+
+// A body point's world coordinates on chosen axes equal a target. z = q.
+class PinKernel : public Kernel {
+ public:
+  PinKernel(std::shared_ptr<const Model<double>> model, int body, const Eigen::Vector3d& point,
+            const Eigen::Vector3d& target, std::array<bool, 3> axes, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  int body_;
+  Eigen::Vector3d point_, target_;
+  std::vector<int> axes_;
+};
+
+// Contact points stay at their ground anchors. z = [q, anchors (x, z per point)]; three rows per
+// point: p - (a_x, ground, a_z).
+class ContactAnchorKernel : public Kernel {
+ public:
+  ContactAnchorKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
+                      double groundHeight, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  ContactPoints contact_;
+  double ground_;
+};
+
+// One control point of a contact-force spline lies in the friction cone (the ground only
+// pushes). Because a B-spline stays in the convex hull of its control points and the cone is
+// convex, the force then lies in the cone at every instant, not only at samples. Planar: the
+// exact cone |fx| <= mu fy; 3D: the inscribed pyramid |fx|, |fz| <= mu / sqrt(2) fy.
+// z = the control point's forces (forceDims per point); rows scaled by 1 / (m g).
+class FrictionConeKernel : public Kernel {
+ public:
+  FrictionConeKernel(int points, int forceDims, double mu, double weightScale, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  int points_, dims_;
+  double mu_, scale_;
+};
+
+// A body point stays at or above a height: height - p_y <= 0. z = q.
+class ClearanceKernel : public Kernel {
+ public:
+  ClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
+                  const Eigen::Vector3d& point, double height, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  int body_;
+  Eigen::Vector3d point_;
+  double height_;
+};
+
+// Joint position limits: q - upper <= 0 and lower - q <= 0 for limited dofs. z = q.
+class JointLimitKernel : public Kernel {
+ public:
+  JointLimitKernel(std::shared_ptr<const Model<double>> model, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  std::vector<int> dofs_;
+};
+
+}  // namespace spacetime

@@ -1,0 +1,23 @@
+// The command-line outputs of a solve: summary.json (solver summary + validity report),
+// motion.json (the Animation in the contract outside tools read) and one URDF per character.
+// Every file is written atomically; the directory is created if needed.
+#pragma once
+
+#include <string>
+
+#include "solver/animation.h"
+#include "solver/augmented_lagrangian.h"
+#include "solver/validity.h"
+
+namespace spacetime {
+
+std::string summaryJson(const SolverSummary& summary, const ValidityReport& validity,
+                        const SpacetimeProblem& problem);
+std::string motionJson(const Animation& animation);
+
+// Writes summary.json, motion.json and <character>.urdf into dir. False with a reason on error.
+bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
+                       const ValidityReport& validity, double rateHz, const std::string& dir,
+                       std::string* error, std::string* warning);
+
+}  // namespace spacetime

@@ -1,0 +1,40 @@
+// The time discretisation of a spacetime problem: one uniform cubic B-spline layout shared by
+// every degree of freedom of every character, and the collocation samples where physics and the
+// objective are evaluated.
+//
+// Samples are Gauss-Legendre nodes inside every spline segment (so the objective integrals are
+// exact for the polynomial integrands of a particle, Golub-Welsch), plus the clip's ends and
+// every contact boundary with zero quadrature weight: physics must hold at the instants where
+// contact begins and ends, which no interior node hits.
+#pragma once
+
+#include <vector>
+
+#include "core/bspline.h"
+#include "core/scene.h"
+
+namespace spacetime {
+
+struct Sample {
+  double time = 0;
+  double weight = 0;  // quadrature weight (0 for the extra boundary samples)
+};
+
+struct Transcription {
+  UniformBSpline motion;
+  std::vector<Sample> samples;  // sorted by time
+
+  static Transcription fromScene(const Scene& scene);
+  // Samples whose time lies in [t0, t1] (inclusive, with a small tolerance).
+  std::vector<Sample> samplesIn(double t0, double t1) const;
+  // A uniform grid with `factor` times as many points as there are samples.
+  std::vector<double> denseGrid(int factor) const;
+};
+
+// Segments of a spline over [t0, t1] at `rate` control points per second (at least one).
+int segmentsFor(double t0, double t1, double rate);
+
+// Gauss-Legendre nodes on [-1, 1] and weights, for 1 <= n <= 16 (Golub-Welsch).
+void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights);
+
+}  // namespace spacetime

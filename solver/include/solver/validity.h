@@ -1,0 +1,45 @@
+// The validity report: is a solved motion physically valid between the samples too?
+//
+// A collocation transcription can look converged while the motion between samples is
+// unphysical, so the report judges on a grid `denseFactor` times denser than the samples:
+// the largest unactuated generalized force (as a fraction of the character's weight), pin
+// errors, contact slip and penetration, contact forces' sign and friction, clearance, rest at
+// the rest terms, and - the independent check - the error of forward-simulating the solved
+// actuated torques with the articulated-body algorithm over each flight phase.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "solver/spacetime_problem.h"
+
+namespace spacetime {
+
+struct FlightCheck {
+  std::string character;
+  double start = 0, end = 0;
+  double maxPositionError = 0;  // max |q_sim - q_solution| over the phase (m or rad)
+  double maxRootLift = 0;       // highest the lowest contact point of the root rises (m)
+};
+
+struct ValidityReport {
+  int denseFactor = 10;
+  double maxUnactuatedResidualSamples = 0;  // fraction of weight, at the collocation samples
+  double maxUnactuatedResidualDense = 0;    // fraction of weight, on the dense grid
+  double worstDenseTime = 0;
+  double maxPinError = 0;                   // m
+  double maxContactSlip = 0;                // m, horizontal distance from the anchor
+  double maxContactPenetration = 0;         // m, below the ground
+  double minNormalForce = 0;                // N (negative would mean pulling)
+  double maxFrictionRatio = 0;              // |f_t| / (mu f_n); <= 1 inside the cone
+  double maxClearanceViolation = 0;         // m
+  double maxRestSpeed = 0;                  // largest |qd| at the rest terms
+  std::vector<FlightCheck> flights;
+  double maxForwardSimulationError = 0;
+  bool contactsPushOnly = true;
+  bool contactsInFrictionCone = true;
+};
+
+ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = 10);
+
+}  // namespace spacetime

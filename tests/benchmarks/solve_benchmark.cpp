@@ -1,0 +1,67 @@
+// Solve time of every shipped scene from its default initial guess, and the time of one full
+// residual + Jacobian evaluation of the Luxo jump. Run a Release build:
+//   ./build/tests/benchmarks/solve_benchmark --benchmark_repetitions=3
+//     --benchmark_report_aggregates_only=true
+// and read the *_median rows.
+#include <benchmark/benchmark.h>
+
+#include <ceres/crs_matrix.h>
+#include <ceres/problem.h>
+
+#include "core/scene_io.h"
+#include "solver/augmented_lagrangian.h"
+
+namespace spacetime {
+namespace {
+
+Scene loadScene(const std::string& name) {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
+  if (!r.scene) throw std::runtime_error(r.error);
+  return *r.scene;
+}
+
+void BM_Solve(benchmark::State& state, const std::string& name) {
+  const Scene scene = loadScene(name);
+  bool converged = true;
+  double violation = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::string error;
+    auto problem = SpacetimeProblem::build(scene, &error);
+    state.ResumeTiming();
+    const SolverSummary s = solveSpacetime(*problem, SolverOptions());
+    converged = converged && s.converged;
+    violation = std::max(violation, s.maxViolation);
+  }
+  state.counters["converged"] = converged ? 1 : 0;
+  state.counters["max_violation"] = violation;
+}
+
+void BM_LuxoJacobian(benchmark::State& state) {
+  const Scene scene = loadScene("luxo_jump.json");
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  double cost = 0;
+  std::vector<double> residuals;
+  ceres::CRSMatrix jacobian;
+  for (auto _ : state) {
+    problem->ceresProblem().Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residuals, nullptr, &jacobian);
+    benchmark::DoNotOptimize(cost);
+  }
+  state.counters["rows"] = jacobian.num_rows;
+  state.counters["cols"] = jacobian.num_cols;
+  state.counters["nonzeros"] = static_cast<double>(jacobian.values.size());
+}
+
+BENCHMARK_CAPTURE(BM_Solve, particle, std::string("particle.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Solve, particle_gravity, std::string("particle_gravity.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Solve, luxo_jump, std::string("luxo_jump.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_hurdle, std::string("luxo_hurdle.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_heavy, std::string("luxo_heavy.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_3d, std::string("luxo_3d.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_LuxoJacobian)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace spacetime
+
+BENCHMARK_MAIN();
