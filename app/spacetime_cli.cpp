@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
   options.maxOuterIterations = loaded.scene->solver.maxOuterIterations;
   options.maxInnerIterations = loaded.scene->solver.maxInnerIterations;
   options.tolerance = loaded.scene->solver.tolerance;
+  options.threads = 2;  // Ceres evaluates residual blocks in parallel (kernels are thread-safe)
   ProgressCallback progress = nullptr;
   if (!quiet)
     progress = [](const IterationReport& r) {

@@ -4,7 +4,6 @@
 #include <ceres/ceres.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <cmath>
 
 namespace spacetime {
@@ -141,10 +140,10 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   co.num_threads = options.threads;
   co.logging_type = ceres::SILENT;
   co.update_state_every_iteration = true;
-  if (getenv("DOGLEG")) co.trust_region_strategy_type = ceres::DOGLEG;
-  if (getenv("RADIUS")) co.initial_trust_region_radius = atof(getenv("RADIUS"));
-  if (getenv("NONMONO")) co.use_nonmonotonic_steps = true;
-  if (getenv("FTOL")) co.function_tolerance = atof(getenv("FTOL"));
+  // Start from (nearly) Gauss-Newton steps and allow non-monotonic progress: measured on the
+  // standing lamp, 164 instead of 253 Levenberg-Marquardt iterations.
+  co.initial_trust_region_radius = 1e10;
+  co.use_nonmonotonic_steps = true;
   ProgressForwarder forwarder(problem, callback, cancel, start, options.maxSeconds);
   co.callbacks.push_back(&forwarder);
 

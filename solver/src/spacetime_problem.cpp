@@ -43,36 +43,56 @@ std::vector<bool> SpacetimeProblem::activeContacts(int c, double t) const {
   return active;
 }
 
-std::vector<const DofGroup*> SpacetimeProblem::groupsAt(int c, double t) const {
-  const CharacterVariables& cv = characters_[c];
-  std::vector<const DofGroup*> out = {&cv.groups[0]};
-  const DofGroup* chosen = nullptr;
-  for (size_t i = 1; i < cv.groups.size(); ++i) {
-    const DofGroup& g = cv.groups[i];
-    if (t < g.start - 1e-9 || t > g.end + 1e-9) continue;
-    if (!chosen) chosen = &g;
-    else if (activeContacts(c, 0.5 * (g.start + g.end)) == activeContacts(c, t)) chosen = &g;
+GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order) const {
+  GroupBasis gb;
+  gb.count = 4;
+  if (!g.hermite) {
+    const BSplineBasis b = g.spline.basis(t);
+    const auto& w = b.derivative(order);
+    for (int i = 0; i < 4; ++i) {
+      gb.block[i] = b.first + i;
+      gb.part[i] = 0;
+      gb.weight[i] = w[i];
+    }
+    return gb;
   }
-  if (chosen) out.push_back(chosen);
-  return out;
-}
-
-void SpacetimeProblem::addGroupInputs(InputMap& in, int c, const DofGroup& g, double t, int order,
-                                      double scale) {
-  const int size = static_cast<int>(g.dofs.size());
-  if (size == 0) return;
-  const int row0 = in.rows() - characters_[c].dofs;  // rows were appended by the caller
-  const BSplineBasis b = g.spline.basis(t);
-  const auto& w = b.derivative(order);
-  for (int i = 0; i < 4; ++i) {
-    const int blk = in.block(x_.data() + g.offset + (b.first + i) * size, size);
-    for (int k = 0; k < size; ++k) in.add(row0 + g.dofs[k], blk, k, scale * w[i]);
+  const auto& br = g.breaks;
+  int k = static_cast<int>(std::upper_bound(br.begin(), br.end(), t) - br.begin()) - 1;
+  k = std::clamp(k, 0, static_cast<int>(br.size()) - 2);
+  // At an interior breakpoint, take the interval on the side that has t's contacts.
+  if (k > 0 && std::abs(t - br[k]) < 1e-9 &&
+      activeContacts(c, 0.5 * (br[k - 1] + br[k])) == activeContacts(c, t) &&
+      activeContacts(c, 0.5 * (br[k] + br[k + 1])) != activeContacts(c, t))
+    --k;
+  const double h = br[k + 1] - br[k];
+  const double u = std::clamp((t - br[k]) / h, 0.0, 1.0), u2 = u * u, u3 = u2 * u;
+  // Cubic Hermite basis (h00, h10, h01, h11) and its derivatives in u.
+  std::array<double, 4> b;
+  switch (order) {
+    case 0: b = {2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, -2 * u3 + 3 * u2, u3 - u2}; break;
+    case 1: b = {6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, -6 * u2 + 6 * u, 3 * u2 - 2 * u}; break;
+    case 2: b = {12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2}; break;
+    default: b = {12, 6, -12, 6}; break;
   }
+  const double scale = std::pow(h, -order);
+  gb.block = {k, k, k + 1, k + 1};
+  gb.part = {0, 1, 0, 1};
+  gb.weight = {b[0] * scale, b[1] * h * scale, b[2] * scale, b[3] * h * scale};
+  return gb;
 }
 
 void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order) {
-  in.newRows(characters_[c].dofs);
-  for (const DofGroup* g : groupsAt(c, t)) addGroupInputs(in, c, *g, t, order, 1.0);
+  const CharacterVariables& cv = characters_[c];
+  const int row0 = in.newRows(cv.dofs);
+  for (const DofGroup& g : cv.groups) {
+    const int n = static_cast<int>(g.dofs.size());
+    if (n == 0) continue;  // Ceres has no zero-size parameter blocks
+    const GroupBasis gb = groupBasis(c, g, t, order);
+    for (int i = 0; i < gb.count; ++i) {
+      const int blk = in.block(x_.data() + g.offset + gb.block[i] * g.blockSize(), g.blockSize());
+      for (int k = 0; k < n; ++k) in.add(row0 + g.dofs[k], blk, gb.part[i] * n + k, gb.weight[i]);
+    }
+  }
 }
 
 int ContactVariables::sampleIndex(double t) const {
@@ -126,34 +146,15 @@ bool SpacetimeProblem::assemble(std::string* error) {
     for (int d = 0; d < cv.dofs; ++d)
       (cv.model->bodies[cv.model->dofBody[d]].actuated ? actuated : unactuated).dofs.push_back(d);
     actuated.spline = transcription_.motion;
-    actuated.start = scene_.startTime;
-    actuated.end = scene_.endTime;
     cv.groups.push_back(actuated);
     if (!unactuated.dofs.empty()) {
-      // Phase boundaries: contact starts and ends of this character inside the clip.
-      std::vector<double> edges = {scene_.startTime, scene_.endTime};
-      for (const TermSpec& t : scene_.terms)
-        if (t.enabled && t.kind == TermKind::Contact && t.character == spec.id)
-          for (double e : {t.start, t.end})
-            if (e > scene_.startTime + 1e-9 && e < scene_.endTime - 1e-9) edges.push_back(e);
-      std::sort(edges.begin(), edges.end());
-      edges.erase(std::unique(edges.begin(), edges.end(),
-                              [](double a, double b) { return std::abs(a - b) < 1e-9; }),
-                  edges.end());
-      const double fineRate = scene_.transcription.controlPointsPerSecond *
-                              scene_.transcription.samplesPerSegment;
-      for (size_t e = 0; e + 1 < edges.size(); ++e) {
-        DofGroup phase = unactuated;
-        phase.start = edges[e];
-        phase.end = edges[e + 1];
-        phase.spline = UniformBSpline(phase.start, phase.end,
-                                      segmentsFor(phase.start, phase.end, fineRate));
-        cv.groups.push_back(phase);
-      }
+      unactuated.hermite = true;
+      unactuated.breaks = transcription_.breakpoints;
+      cv.groups.push_back(unactuated);
     }
     for (DofGroup& g : cv.groups) {
       g.offset = size;
-      size += static_cast<int>(g.dofs.size()) * g.spline.controlPointCount();
+      size += g.blockSize() * g.blockCount();
     }
     characters_.push_back(cv);
   }
@@ -312,29 +313,6 @@ bool SpacetimeProblem::assemble(std::string* error) {
                   in);
     }
   }
-  // Continuity of the unactuated dofs' position and velocity across phase boundaries (their
-  // acceleration may jump there, as the contact force does).
-  for (size_t c = 0; c < characters_.size(); ++c) {
-    const CharacterVariables& cv = characters_[c];
-    for (size_t i = 2; i < cv.groups.size(); ++i) {
-      const DofGroup& left = cv.groups[i - 1];
-      const DofGroup& right = cv.groups[i];
-      for (int order = 0; order < 2; ++order) {
-        InputMap in;
-        in.newRows(cv.dofs);
-        addGroupInputs(in, static_cast<int>(c), left, right.start, order, 1.0);
-        addGroupInputs(in, static_cast<int>(c), right, right.start, order, -1.0);
-        std::vector<std::pair<int, double>> zero;
-        for (int d : right.dofs) zero.emplace_back(d, 0.0);
-        addResidual(std::make_shared<TargetKernel>(
-                        cv.dofs, zero,
-                        at(std::string(order ? "velocity" : "position") + " continuity " +
-                               scene_.characters[c].id,
-                           right.start)),
-                    in);
-      }
-    }
-  }
   return true;
 }
 
@@ -421,19 +399,23 @@ void SpacetimeProblem::initialGuess() {
     for (const DofGroup& grp : cv.groups) {
       const int size = static_cast<int>(grp.dofs.size());
       if (size == 0) continue;
-      std::vector<double> groupTimes;
-      std::vector<int> rows;
-      for (size_t i = 0; i < times.size(); ++i)
-        if (times[i] >= grp.start - 1e-9 && times[i] <= grp.end + 1e-9) {
-          groupTimes.push_back(times[i]);
-          rows.push_back(static_cast<int>(i));
+      Eigen::MatrixXd groupValues(values.rows(), size);
+      for (int k = 0; k < size; ++k) groupValues.col(k) = values.col(grp.dofs[k]);
+      // Fit the B-spline through the target, then read the Hermite data off that fit.
+      const Eigen::MatrixXd ctrl = spline.fit(times, groupValues);
+      if (!grp.hermite) {
+        for (int k = 0; k < spline.controlPointCount(); ++k)
+          for (int d = 0; d < size; ++d) x_[grp.offset + k * size + d] = ctrl(k, d);
+        continue;
+      }
+      for (size_t k = 0; k < grp.breaks.size(); ++k) {
+        const Eigen::RowVectorXd p = spline.evaluate(ctrl, grp.breaks[k], 0);
+        const Eigen::RowVectorXd v = spline.evaluate(ctrl, grp.breaks[k], 1);
+        for (int d = 0; d < size; ++d) {
+          x_[grp.offset + k * 2 * size + d] = p[d];
+          x_[grp.offset + k * 2 * size + size + d] = v[d];
         }
-      Eigen::MatrixXd groupValues(rows.size(), size);
-      for (size_t r = 0; r < rows.size(); ++r)
-        for (int k = 0; k < size; ++k) groupValues(r, k) = values(rows[r], grp.dofs[k]);
-      const Eigen::MatrixXd ctrl = grp.spline.fit(groupTimes, groupValues);
-      for (int k = 0; k < grp.spline.controlPointCount(); ++k)
-        for (int d = 0; d < size; ++d) x_[grp.offset + k * size + d] = ctrl(k, d);
+      }
     }
   }
   // Contact forces: the weight shared among the contact's points; anchors under the points.
@@ -456,18 +438,13 @@ void SpacetimeProblem::initialGuess() {
 
 Eigen::VectorXd SpacetimeProblem::jointState(int c, double t, int order) const {
   const CharacterVariables& cv = characters_[c];
-  Eigen::VectorXd out(cv.dofs);
-  for (const DofGroup* gp : groupsAt(c, t)) {
-    const DofGroup& g = *gp;
-    const int size = static_cast<int>(g.dofs.size());
-    if (size == 0) continue;
-    const BSplineBasis b = g.spline.basis(t);
-    const auto& w = b.derivative(order);
-    for (int k = 0; k < size; ++k) {
-      double v = 0;
-      for (int i = 0; i < 4; ++i) v += w[i] * x_[g.offset + (b.first + i) * size + k];
-      out[g.dofs[k]] = v;
-    }
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(cv.dofs);
+  for (const DofGroup& g : cv.groups) {
+    const int n = static_cast<int>(g.dofs.size());
+    const GroupBasis gb = groupBasis(c, g, t, order);
+    for (int i = 0; i < gb.count; ++i)
+      for (int k = 0; k < n; ++k)
+        out[g.dofs[k]] += gb.weight[i] * x_[g.offset + gb.block[i] * g.blockSize() + gb.part[i] * n + k];
   }
   return out;
 }

@@ -29,12 +29,24 @@ Transcription Transcription::fromScene(const Scene& scene) {
   Transcription tr;
   const double t0 = scene.startTime, t1 = scene.endTime;
   tr.motion = UniformBSpline(t0, t1, segmentsFor(t0, t1, scene.transcription.controlPointsPerSecond));
+  // Breakpoints: the spline's knots and every contact edge inside the clip.
+  for (int k = 0; k <= tr.motion.segmentCount(); ++k)
+    tr.breakpoints.push_back(t0 + k * tr.motion.knotSpacing());
+  for (const TermSpec& t : scene.terms)
+    if (t.enabled && t.kind == TermKind::Contact)
+      for (double e : {t.start, t.end})
+        if (e > t0 && e < t1) tr.breakpoints.push_back(e);
+  std::sort(tr.breakpoints.begin(), tr.breakpoints.end());
+  tr.breakpoints.erase(std::unique(tr.breakpoints.begin(), tr.breakpoints.end(),
+                                   [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+                       tr.breakpoints.end());
+  tr.breakpoints.back() = t1;
   std::vector<double> x, w;
   gaussLegendre(scene.transcription.samplesPerSegment, &x, &w);
-  const double h = tr.motion.knotSpacing();
-  for (int s = 0; s < tr.motion.segmentCount(); ++s)
-    for (size_t i = 0; i < x.size(); ++i)
-      tr.samples.push_back({t0 + h * (s + 0.5 * (x[i] + 1)), 0.5 * h * w[i]});
+  for (size_t k = 0; k + 1 < tr.breakpoints.size(); ++k) {
+    const double a = tr.breakpoints[k], h = tr.breakpoints[k + 1] - a;
+    for (size_t i = 0; i < x.size(); ++i) tr.samples.push_back({a + h * 0.5 * (x[i] + 1), 0.5 * h * w[i]});
+  }
   std::vector<double> extra = {t0, t1};
   for (const TermSpec& t : scene.terms)
     if (t.enabled && t.kind == TermKind::Contact) {

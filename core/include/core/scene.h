@@ -100,7 +100,7 @@ struct ObjectiveSpec {
 
 struct TranscriptionSpec {
   double controlPointsPerSecond = 20;
-  int samplesPerSegment = 3;
+  int samplesPerSegment = 2;  // Gauss points between breakpoints (2: de Boor-Swartz)
 };
 
 struct SolverSpec {

@@ -12,6 +12,7 @@
 
 #include <ceres/problem.h>
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,21 +24,36 @@
 
 namespace spacetime {
 
-// Degrees of freedom are split into spline groups. Actuated dofs share one coarse spline (the
-// scene's control-point rate) over the whole clip. Unactuated dofs (the floating root) get a
-// finer spline (samplesPerSegment times the rate) and one spline per contact phase, joined by
-// continuity of position and velocity only:
-// - physics imposes the unactuated equations at every sample; with one shared spline those
-//   would outnumber the unknowns (3 equations x 3 samples against 6 control points per segment
-//   for a planar lamp) and no motion could satisfy them. In flight the root's motion follows
-//   from the joints through momentum, so it gets the resolution;
-// - when a foot leaves or meets the ground the contact force jumps and so does the root's
-//   acceleration; a C2 spline across the instant would force both to vanish there.
+// Degrees of freedom are split in two groups.
+// - Actuated dofs: uniform cubic B-splines (C2) at the scene's control-point rate; their shape
+//   is what the animator sees and the smoothness term acts on.
+// - Unactuated dofs (the floating root): C1 piecewise cubic Hermite curves (a position and a
+//   velocity per breakpoint) collocated at two Gauss points per interval - the convergent
+//   collocation of de Boor & Swartz (1973) for second-order ODEs, with as many unknowns as
+//   physics equations, so the root follows the dynamics the joints drive. A C2 spline
+//   collocated once per segment would have a null mode (alternating control points vanish at
+//   segment midpoints) and could wiggle freely between samples; a C2 spline collocated more
+//   often would have fewer unknowns than equations. The root's acceleration may jump at
+//   breakpoints, as it must where a contact begins or ends.
 struct DofGroup {
-  UniformBSpline spline;
-  std::vector<int> dofs;  // dof indices in this group
-  int offset = 0;         // control point k of this group at offset + k * dofs.size()
-  double start = 0, end = 0;
+  bool hermite = false;
+  UniformBSpline spline;         // B-spline group
+  std::vector<double> breaks;    // Hermite group: breakpoints
+  std::vector<int> dofs;         // dof indices in this group
+  int offset = 0;  // B-spline: control point k at offset + k * n; Hermite: breakpoint k holds
+                   // positions then velocities at offset + k * 2n (n = dofs.size())
+  int blockSize() const { return (hermite ? 2 : 1) * static_cast<int>(dofs.size()); }
+  int blockCount() const {
+    return hermite ? static_cast<int>(breaks.size()) : spline.controlPointCount();
+  }
+};
+
+// The linear map from a group's blocks to its dofs' derivative of some order at a time:
+// dof k of the group = sum over i of weight[i] * block[block[i]][part[i] * n + k].
+struct GroupBasis {
+  int count = 0;
+  std::array<int, 4> block{}, part{};
+  std::array<double, 4> weight{};
 };
 
 struct CharacterVariables {
@@ -45,8 +61,7 @@ struct CharacterVariables {
   int dofs = 0;
   double weight = 1;  // m |g| (or m * 1 m/s^2 without gravity): the force scale
   int forceDims = 3;  // 2 for planar characters
-  // [0]: actuated dofs over the clip; then the unactuated dofs' phases in time order.
-  std::vector<DofGroup> groups;
+  std::vector<DofGroup> groups;  // [0] actuated (B-spline), [1] unactuated (Hermite) if any
 };
 
 // Contact forces are one value per collocation sample inside the interval (linearly
@@ -107,12 +122,10 @@ class SpacetimeProblem {
   void addMotionInputs(InputMap& in, int character, double t, int order);
   void addForceInputs(InputMap& in, int contact, double t, double scale = 1.0);
   void addAnchorInputs(InputMap& in, int contact);
-  // The spline groups that describe a character at time t: the actuated group and the phase of
-  // the unactuated dofs (at a phase boundary, the phase whose contacts are those active at t).
-  std::vector<const DofGroup*> groupsAt(int character, double t) const;
+  // The basis of a group at t. At a Hermite breakpoint the interval whose contacts are those
+  // active at t is used (the instant a contact ends belongs to the contact phase).
+  GroupBasis groupBasis(int character, const DofGroup& g, double t, int order) const;
   std::vector<bool> activeContacts(int character, double t) const;
-  void addGroupInputs(InputMap& in, int character, const DofGroup& g, double t, int order,
-                      double scale);
 
   Scene scene_;
   Transcription transcription_;

@@ -2,10 +2,11 @@
 // every degree of freedom of every character, and the collocation samples where physics and the
 // objective are evaluated.
 //
-// Samples are Gauss-Legendre nodes inside every spline segment (so the objective integrals are
-// exact for the polynomial integrands of a particle, Golub-Welsch), plus the clip's ends and
-// every contact boundary with zero quadrature weight: physics must hold at the instants where
-// contact begins and ends, which no interior node hits.
+// Breakpoints are the spline's knots plus every contact edge. Samples are Gauss-Legendre nodes
+// inside every interval between breakpoints (two by default: the collocation of de Boor &
+// Swartz 1973 for the root's C1 piecewise cubics, and exact quadrature of the particle's
+// piecewise-quadratic integrands), plus the clip's ends and every contact edge with zero
+// quadrature weight: physics must hold at the instants where contact begins and ends.
 #pragma once
 
 #include <vector>
@@ -21,8 +22,9 @@ struct Sample {
 };
 
 struct Transcription {
-  UniformBSpline motion;
-  std::vector<Sample> samples;  // sorted by time
+  UniformBSpline motion;            // the actuated joints' spline
+  std::vector<double> breakpoints;  // knots and contact edges, sorted
+  std::vector<Sample> samples;      // sorted by time
 
   static Transcription fromScene(const Scene& scene);
   // Samples whose time lies in [t0, t1] (inclusive, with a small tolerance).

@@ -1,0 +1,64 @@
+// The Luxo lamp: a free fall against the projectile it must be, and the jump scene's
+// constraints (lift-off, rest at both ends, contact forces that only push and stay in the
+// friction cone) checked on the solved motion.
+#include <gtest/gtest.h>
+
+#include "core/scene_io.h"
+#include "solver/augmented_lagrangian.h"
+#include "solver/validity.h"
+
+namespace spacetime {
+namespace {
+
+Scene luxoScene() {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/luxo_jump.json");
+  EXPECT_TRUE(r.scene) << r.error;
+  return *r.scene;
+}
+
+// Released at rest with no contact, the optimum keeps the joints still (no torque needed in
+// free fall) and the root falls as a projectile, y = -g t^2 / 2, on the dense grid too.
+TEST(Luxo, FreeFallIsAProjectile) {
+  Scene scene = luxoScene();
+  scene.endTime = 0.4;
+  std::vector<TermSpec> kept;
+  for (const TermSpec& t : scene.terms)
+    if (t.id == "start_pose" || t.id == "start_rest") kept.push_back(t);
+  scene.terms = kept;
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  const SolverSummary s = solveSpacetime(*problem, SolverOptions());
+  ASSERT_TRUE(s.converged) << s.reason;
+  const ValidityReport v = checkValidity(*problem);
+  EXPECT_LT(v.maxUnactuatedResidualDense, 1e-5);
+  for (double t = 0; t <= 0.4; t += 0.01) {
+    const Eigen::VectorXd q = problem->jointState(0, t, 0);
+    EXPECT_NEAR(q[1], -0.5 * 9.81 * t * t, 2e-3) << t;  // base_y
+    EXPECT_NEAR(q[3], 0.4, 2e-2) << t;                    // j1 barely moves
+  }
+}
+
+TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
+  const Scene scene = luxoScene();
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  SolverOptions options;
+  options.maxOuterIterations = scene.solver.maxOuterIterations;
+  options.threads = 2;
+  const SolverSummary s = solveSpacetime(*problem, options);
+  EXPECT_TRUE(s.converged) << s.reason << " worst " << s.worstConstraint;
+  const ValidityReport v = checkValidity(*problem);
+  EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);
+  ASSERT_EQ(v.flights.size(), 1u);
+  EXPECT_GE(v.flights[0].maxRootLift, 0.05);
+  EXPECT_LT(v.maxRestSpeed, 1e-6);
+  EXPECT_TRUE(v.contactsPushOnly);
+  EXPECT_TRUE(v.contactsInFrictionCone);
+  EXPECT_LT(v.maxContactSlip, 1e-6);
+  EXPECT_LT(v.maxClearanceViolation, 1e-3);
+}
+
+}  // namespace
+}  // namespace spacetime
