@@ -65,11 +65,8 @@ DynamicsKernel::DynamicsKernel(std::shared_ptr<const Model<double>> model,
 }
 
 template <class T>
-void DynamicsKernel::compute(const T* z, T* rows) const {
+VecX<T> DynamicsKernel::generalizedForces(const T* z, bool withMotion, bool withGravity) const {
   const int n = model_->dofCount();
-  const T* q = z;
-  const T* qd = z + n;
-  const T* qdd = z + 2 * n;
   std::vector<PointForce<T>> fext;
   int k = 3 * n;
   for (const auto& c : contacts_)
@@ -83,7 +80,16 @@ void DynamicsKernel::compute(const T* z, T* rows) const {
       fext.push_back(pf);
     }
   Data<T> data(*model_);
-  const VecX<T>& tau = rnea(*model_, data, q, qd, qdd, fext);
+  const T* none = nullptr;
+  return rnea(*model_, data, z, withMotion ? z + n : none, withMotion ? z + 2 * n : none, fext,
+              withGravity);
+}
+
+template <class T>
+void DynamicsKernel::compute(const T* z, T* rows) const {
+  const int n = model_->dofCount();
+  const T* qd = z + n;
+  const VecX<T> tau = generalizedForces(z);
   const double sqrtEffort = std::sqrt(options_.effortWeight);
   const double sqrtPower = std::sqrt(options_.powerWeight);
   for (size_t r = 0; r < rows_.size(); ++r) {
@@ -95,6 +101,68 @@ void DynamicsKernel::compute(const T* z, T* rows) const {
       case Row::Power: rows[r] = tau[d] * qd[d] * sqrtPower; break;
       case Row::TorqueUpper: rows[r] = (tau[d] - b.effortLimit) * options_.weightScale; break;
       case Row::TorqueLower: rows[r] = (-tau[d] - b.effortLimit) * options_.weightScale; break;
+    }
+  }
+}
+
+void DynamicsKernel::evaluateWithJacobian(const double* z, double* rows, double* jacobian) const {
+  const int n = model_->dofCount(), nz = inputs_;
+  Eigen::MatrixXd dtau = Eigen::MatrixXd::Zero(n, nz);
+  Eigen::VectorXd tau(n);
+  // Forward mode over (q, qd); qdd and forces enter as constants.
+  std::vector<JetChunk> zj(nz);
+  for (int start = 0; start < 2 * n; start += kJetWidth) {
+    for (int i = 0; i < nz; ++i) {
+      zj[i] = JetChunk(z[i]);
+      if (i >= start && i < std::min(start + kJetWidth, 2 * n)) zj[i].v[i - start] = 1.0;
+    }
+    const VecX<JetChunk> t = generalizedForces(zj.data());
+    const int width = std::min(kJetWidth, 2 * n - start);
+    for (int d = 0; d < n; ++d) {
+      tau[d] = t[d].a;
+      for (int k = 0; k < width; ++k) dtau(d, start + k) = t[d].v[k];
+    }
+  }
+  // d tau / d qdd = M(q) (RBDA Table 6.2).
+  Data<double> data(*model_);
+  dtau.block(0, 2 * n, n, n) = crba(*model_, data, z);
+  // d tau / d f_k: RNEA with only the unit force k (linear, so exact).
+  std::vector<double> unit(z, z + nz);
+  for (int k = 3 * n; k < nz; ++k) {
+    std::fill(unit.begin() + 3 * n, unit.end(), 0.0);
+    unit[k] = 1.0;
+    dtau.col(k) = generalizedForces(unit.data(), /*withMotion=*/false, /*withGravity=*/false);
+  }
+  const double* qd = z + n;
+  const double sqrtEffort = std::sqrt(options_.effortWeight);
+  const double sqrtPower = std::sqrt(options_.powerWeight);
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+      jacobian, rowCount(), nz);
+  for (size_t r = 0; r < rows_.size(); ++r) {
+    const auto [row, d] = rows_[r];
+    const Body<double>& b = model_->bodies[model_->dofBody[d]];
+    switch (row) {
+      case Row::Physics:
+        rows[r] = tau[d] * options_.weightScale;
+        J.row(r) = dtau.row(d) * options_.weightScale;
+        break;
+      case Row::Effort:
+        rows[r] = tau[d] * sqrtEffort;
+        J.row(r) = dtau.row(d) * sqrtEffort;
+        break;
+      case Row::Power:
+        rows[r] = tau[d] * qd[d] * sqrtPower;
+        J.row(r) = dtau.row(d) * (qd[d] * sqrtPower);
+        J(r, n + d) += tau[d] * sqrtPower;
+        break;
+      case Row::TorqueUpper:
+        rows[r] = (tau[d] - b.effortLimit) * options_.weightScale;
+        J.row(r) = dtau.row(d) * options_.weightScale;
+        break;
+      case Row::TorqueLower:
+        rows[r] = (-tau[d] - b.effortLimit) * options_.weightScale;
+        J.row(r) = -dtau.row(d) * options_.weightScale;
+        break;
     }
   }
 }

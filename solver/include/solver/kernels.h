@@ -33,8 +33,9 @@ class Kernel {
 
   virtual void evaluate(const double* z, double* rows) const = 0;
   virtual void evaluate(const JetChunk* z, JetChunk* rows) const = 0;
-  // Rows and their row-major Jacobian (rowCount x inputSize) with respect to z.
-  void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const;
+  // Rows and their row-major Jacobian (rowCount x inputSize) with respect to z. The default
+  // seeds Jets on every input; kernels with linear structure override it.
+  virtual void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const;
 
  protected:
   int inputs_ = 0;
@@ -70,8 +71,14 @@ class DynamicsKernel : public Kernel {
   DynamicsKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
                  int forceDims, const Options& options, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  // tau is linear in qdd and the contact forces (tau = M qdd + h(q, qd) - J^T f), so Jets are
+  // seeded on (q, qd) only; d tau / d qdd is the CRBA mass matrix and d tau / d f_k the RNEA of
+  // a unit force with no motion and no gravity.
+  void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const override;
 
  private:
+  template <class T>
+  VecX<T> generalizedForces(const T* z, bool withMotion = true, bool withGravity = true) const;
   enum class Row { Physics, Effort, Power, TorqueUpper, TorqueLower };
   std::shared_ptr<const Model<double>> model_;
   std::vector<ContactPoints> contacts_;
