@@ -52,6 +52,7 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   val["max_contact_penetration"] = v.maxContactPenetration;
   val["min_normal_force"] = v.minNormalForce;
   val["max_friction_ratio"] = v.maxFrictionRatio;
+  val["max_cone_violation"] = v.maxConeViolation;
   val["contacts_push_only"] = v.contactsPushOnly;
   val["contacts_in_friction_cone"] = v.contactsInFrictionCone;
   val["max_clearance_violation"] = v.maxClearanceViolation;

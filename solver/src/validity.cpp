@@ -134,15 +134,18 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
         r.maxContactPenetration = std::max(r.maxContactPenetration, scene.groundHeight - w.y());
         r.minNormalForce = std::min(r.minNormalForce, f[p].y());
         const double tangential = std::hypot(f[p].x(), f[p].z());
-        if (f[p].y() > 1e-9) r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));
-        else if (tangential > 1e-6) r.maxFrictionRatio = std::max(r.maxFrictionRatio, 1e9);
+        const double weight = problem.characters()[ct.character].weight;
+        // The 3D cone is imposed as its inscribed pyramid, so this check is conservative there.
+        r.maxConeViolation = std::max(r.maxConeViolation, (tangential - ct.friction * f[p].y()) / weight);
+        if (f[p].y() >= 0.01 * weight)
+          r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));
       }
     }
   }
   if (!problem.contacts().empty()) {
     const double tol = 1e-6;
     r.contactsPushOnly = r.minNormalForce >= -tol * problem.characters()[0].weight;
-    r.contactsInFrictionCone = r.maxFrictionRatio <= 1 + 1e-6;
+    r.contactsInFrictionCone = r.maxConeViolation <= tol;
   }
   // Flight phases: maximal intervals in which a character that has contacts touches nothing.
   for (size_t c = 0; c < problem.characters().size(); ++c) {

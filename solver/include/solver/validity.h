@@ -31,7 +31,8 @@ struct ValidityReport {
   double maxContactSlip = 0;                // m, horizontal distance from the anchor
   double maxContactPenetration = 0;         // m, below the ground
   double minNormalForce = 0;                // N (negative would mean pulling)
-  double maxFrictionRatio = 0;              // |f_t| / (mu f_n); <= 1 inside the cone
+  double maxFrictionRatio = 0;              // |f_t| / (mu f_n) where f_n >= 1 % of weight
+  double maxConeViolation = 0;              // max(0, |f_t| - mu f_n), fraction of weight
   double maxClearanceViolation = 0;         // m
   double maxRestSpeed = 0;                  // largest |qd| at the rest terms
   std::vector<FlightCheck> flights;
