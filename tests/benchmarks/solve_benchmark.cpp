@@ -29,7 +29,12 @@ void BM_Solve(benchmark::State& state, const std::string& name) {
     std::string error;
     auto problem = SpacetimeProblem::build(scene, &error);
     state.ResumeTiming();
-    const SolverSummary s = solveSpacetime(*problem, SolverOptions());
+    SolverOptions options;  // the scene's own settings, as spacetime-cli uses them
+    options.maxOuterIterations = scene.solver.maxOuterIterations;
+    options.maxInnerIterations = scene.solver.maxInnerIterations;
+    options.tolerance = scene.solver.tolerance;
+    options.maxSeconds = 120;
+    const SolverSummary s = solveSpacetime(*problem, options);
     converged = converged && s.converged;
     violation = std::max(violation, s.maxViolation);
   }
