@@ -1,0 +1,119 @@
+// The expression graph: the seed's Expression Manager rebuilt for size and speed.
+//
+// Nodes live in one arena as 12-byte records (an op and two 32-bit child ids; constants sit in
+// a side table and are referenced by index), hash-consed on (op, children) so an equal
+// subexpression is always the same node, and simplified as they are built (constant folding,
+// x+0, x*1, x*0, x-x, -(-x), gathered constants in sums and products). Simplification only ever
+// returns an existing node or one new node, so it never grows the graph beyond what was asked.
+// Expressions are differentiated symbolically (new nodes, simplified) and compiled into a Tape
+// for evaluation (see tape.h).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace spacetime::expr {
+
+enum class Op : std::uint8_t {
+  Const, Var, Time,
+  Add, Sub, Mul, Div, Neg,
+  Sin, Cos, Tan, Exp, Log, Sqrt, Abs,
+  Pow,  // real exponent; an integer-valued constant exponent evaluates by repeated products
+  Min, Max,
+};
+
+inline constexpr std::uint32_t kNone = 0xffffffffu;
+
+struct Node {
+  Op op = Op::Const;
+  std::uint32_t a = kNone;  // first child, constant index (Const) or variable index (Var)
+  std::uint32_t b = kNone;  // second child
+};
+static_assert(sizeof(Node) <= 12, "nodes must stay compact");
+
+class Graph;
+
+// A handle: the graph and a node id. Cheap to copy; arithmetic builds (simplified, shared)
+// nodes in the handle's graph.
+struct Expr {
+  Graph* graph = nullptr;
+  std::uint32_t id = kNone;
+};
+
+class Graph {
+ public:
+  Graph();
+
+  Expr constant(double value);
+  Expr variable(std::uint32_t index);
+  Expr time();
+  Expr make(Op op, Expr a, Expr b = {});  // simplifying, hash-consing constructor
+
+  const Node& node(std::uint32_t id) const { return nodes_[id]; }
+  double constantValue(std::uint32_t id) const { return constants_[nodes_[id].a]; }
+  bool isConstant(std::uint32_t id, double value) const {
+    return nodes_[id].op == Op::Const && constants_[nodes_[id].a] == value;
+  }
+  std::size_t size() const { return nodes_.size(); }
+  std::size_t arenaBytes() const { return nodes_.capacity() * sizeof(Node); }
+  std::size_t indexBytes() const;  // the hash index and the constant table, counted apart
+
+  // d expr / d variable(index), simplified.
+  Expr derivative(Expr e, std::uint32_t variable);
+  // Direct evaluation by recursion over a node (for tests; use a Tape for speed).
+  double evaluate(Expr e, const std::vector<double>& variables, double t = 0) const;
+  std::string toString(Expr e) const;
+
+ private:
+  struct Key {
+    Op op;
+    std::uint32_t a, b;
+    bool operator==(const Key& o) const { return op == o.op && a == o.a && b == o.b; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = (static_cast<std::uint64_t>(k.a) << 32) ^ k.b;
+      h ^= static_cast<std::uint64_t>(k.op) * 0x9e3779b97f4a7c15ull;
+      h ^= h >> 29;
+      h *= 0xbf58476d1ce4e5b9ull;
+      return static_cast<std::size_t>(h ^ (h >> 32));
+    }
+  };
+  std::uint32_t intern(Op op, std::uint32_t a, std::uint32_t b);
+  Expr simplify(Op op, Expr a, Expr b);
+
+  std::vector<Node> nodes_;
+  std::vector<double> constants_;
+  std::unordered_map<Key, std::uint32_t, KeyHash> index_;
+  std::unordered_map<std::uint64_t, std::uint32_t> constantIndex_;  // bit pattern -> node
+};
+
+// Arithmetic on handles (both in the same graph, or one a double).
+Expr operator+(Expr a, Expr b);
+Expr operator-(Expr a, Expr b);
+Expr operator*(Expr a, Expr b);
+Expr operator/(Expr a, Expr b);
+Expr operator-(Expr a);
+Expr operator+(Expr a, double b);
+Expr operator+(double a, Expr b);
+Expr operator-(Expr a, double b);
+Expr operator-(double a, Expr b);
+Expr operator*(Expr a, double b);
+Expr operator*(double a, Expr b);
+Expr operator/(Expr a, double b);
+Expr operator/(double a, Expr b);
+Expr sin(Expr a);
+Expr cos(Expr a);
+Expr tan(Expr a);
+Expr exp(Expr a);
+Expr log(Expr a);
+Expr sqrt(Expr a);
+Expr abs(Expr a);
+Expr pow(Expr a, Expr b);
+Expr pow(Expr a, double b);
+Expr min(Expr a, Expr b);
+Expr max(Expr a, Expr b);
+
+}  // namespace spacetime::expr

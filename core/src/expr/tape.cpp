@@ -1,0 +1,122 @@
+// Tape compilation (iterative post-order, so deep graphs cannot overflow the stack), slot
+// allocation by last use, and the reverse sweep (Griewank & Walther, "Evaluating Derivatives",
+// ch. 3: adjoints accumulated in reverse instruction order).
+#include "core/expr/tape.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace spacetime::expr {
+
+Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseSlots) {
+  Tape tape;
+  tape.reuse_ = reuseSlots;
+  // Topological order of the reachable nodes.
+  std::vector<std::uint32_t> order;
+  std::unordered_map<std::uint32_t, std::uint32_t> position;  // node -> index in order
+  std::vector<std::pair<std::uint32_t, bool>> stack;
+  for (const Expr& e : outputs) stack.push_back({e.id, false});
+  while (!stack.empty()) {
+    auto [id, expanded] = stack.back();
+    stack.pop_back();
+    if (position.count(id)) continue;
+    const Node& n = g.node(id);
+    const bool leaf = n.op == Op::Const || n.op == Op::Var || n.op == Op::Time;
+    if (expanded || leaf) {
+      position.emplace(id, static_cast<std::uint32_t>(order.size()));
+      order.push_back(id);
+      continue;
+    }
+    stack.push_back({id, true});
+    if (n.b != kNone && !position.count(n.b)) stack.push_back({n.b, false});
+    if (!position.count(n.a)) stack.push_back({n.a, false});
+  }
+  // Last reader of every value (outputs live to the end).
+  std::vector<std::size_t> lastUse(order.size(), 0);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const Node& n = g.node(order[i]);
+    if (n.op == Op::Const || n.op == Op::Var || n.op == Op::Time) continue;
+    lastUse[position[n.a]] = i;
+    if (n.b != kNone) lastUse[position[n.b]] = i;
+  }
+  for (const Expr& e : outputs) lastUse[position[e.id]] = order.size();
+  // Slots.
+  std::vector<std::uint32_t> slotOf(order.size());
+  std::vector<std::uint32_t> freeSlots;
+  std::vector<std::vector<std::uint32_t>> releaseAt(order.size() + 1);
+  std::uint32_t nextSlot = 0;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const Node& n = g.node(order[i]);
+    Instruction in{n.op, 0, 0, 0};
+    if (n.op == Op::Const) {
+      in.a = static_cast<std::uint32_t>(tape.constants_.size());
+      tape.constants_.push_back(g.constantValue(order[i]));
+    } else if (n.op == Op::Var) {
+      in.a = n.a;
+    } else if (n.op != Op::Time) {
+      in.a = slotOf[position[n.a]];
+      in.b = n.b != kNone ? slotOf[position[n.b]] : 0;
+    }
+    // Operands whose last use is this instruction free their slots before the result is
+    // placed, so the result may overwrite an operand (each op reads before it writes).
+    if (reuseSlots)
+      for (std::uint32_t s : releaseAt[i]) freeSlots.push_back(s);
+    if (reuseSlots && !freeSlots.empty()) {
+      in.dst = freeSlots.back();
+      freeSlots.pop_back();
+    } else {
+      in.dst = nextSlot++;
+    }
+    slotOf[i] = in.dst;
+    if (reuseSlots && lastUse[i] < order.size() && lastUse[i] > i) releaseAt[lastUse[i]].push_back(in.dst);
+    if (reuseSlots && lastUse[i] == 0 && i + 1 < order.size()) releaseAt[i + 1].push_back(in.dst);  // unused
+    tape.code_.push_back(in);
+  }
+  for (const Expr& e : outputs) tape.outputs_.push_back(slotOf[position[e.id]]);
+  tape.slots_ = nextSlot;
+  return tape;
+}
+
+void Tape::gradient(const double* v, double time, std::size_t output, double* grad,
+                    std::size_t count, std::vector<double>& w, std::vector<double>& adj) const {
+  if (reuse_) throw std::logic_error("expr::Tape::gradient needs a tape compiled without slot reuse");
+  std::vector<double> outs(outputs_.size());
+  evaluate(v, time, outs.data(), w);
+  adj.assign(slots_, 0.0);
+  std::fill(grad, grad + count, 0.0);
+  adj[outputs_[output]] = 1.0;
+  for (std::size_t i = code_.size(); i-- > 0;) {
+    const Instruction& in = code_[i];
+    const double a = adj[in.dst];
+    if (a == 0.0) continue;
+    const double x = w[in.a], y = w[in.b], r = w[in.dst];
+    switch (in.op) {
+      case Op::Const:
+      case Op::Time: break;
+      case Op::Var:
+        if (in.a < count) grad[in.a] += a;
+        break;
+      case Op::Add: adj[in.a] += a; adj[in.b] += a; break;
+      case Op::Sub: adj[in.a] += a; adj[in.b] -= a; break;
+      case Op::Mul: adj[in.a] += a * y; adj[in.b] += a * x; break;
+      case Op::Div: adj[in.a] += a / y; adj[in.b] -= a * r / y; break;
+      case Op::Neg: adj[in.a] -= a; break;
+      case Op::Sin: adj[in.a] += a * std::cos(x); break;
+      case Op::Cos: adj[in.a] -= a * std::sin(x); break;
+      case Op::Tan: adj[in.a] += a * (1 + r * r); break;
+      case Op::Exp: adj[in.a] += a * r; break;
+      case Op::Log: adj[in.a] += a / x; break;
+      case Op::Sqrt: adj[in.a] += a / (2 * r); break;
+      case Op::Abs: adj[in.a] += x >= 0 ? a : -a; break;
+      case Op::Pow:
+        adj[in.a] += a * y * std::pow(x, y - 1);
+        if (x > 0) adj[in.b] += a * r * std::log(x);
+        break;
+      case Op::Min: (x < y ? adj[in.a] : adj[in.b]) += a; break;
+      case Op::Max: (x < y ? adj[in.b] : adj[in.a]) += a; break;
+    }
+  }
+}
+
+}  // namespace spacetime::expr
