@@ -6,8 +6,12 @@
 
 #include <random>
 
+#include "core/expr/eigen_scalar.h"
 #include "core/expr/graph.h"
 #include "core/expr/tape.h"
+#include "core/scene_io.h"
+#include "dynamics/algorithms.h"
+#include "dynamics/build_model.h"
 
 namespace spacetime::expr {
 namespace {
@@ -59,6 +63,47 @@ void BM_TapeGradient(benchmark::State& state) {
   state.counters["instructions"] = static_cast<double>(tape.length());
 }
 
+Model<double> luxo() {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/luxo_jump.json");
+  return buildModel(r.scene->characters[0], r.scene->gravity);
+}
+
+// The Luxo lamp's RNEA built symbolically and compiled; compare with BM_NativeRnea.
+void BM_SymbolicRneaTape(benchmark::State& state) {
+  const Model<double> model = luxo();
+  const int n = model.dofCount();
+  Graph g;
+  std::vector<Expr> z;
+  for (int i = 0; i < 3 * n; ++i) z.push_back(g.variable(i));
+  Data<Expr> data(model);
+  const VecX<Expr> tau = rnea(model, data, z.data(), z.data() + n, z.data() + 2 * n);
+  std::vector<Expr> outputs(tau.data(), tau.data() + n);
+  const Tape tape = Tape::compile(g, outputs, true);
+  std::vector<double> x(3 * n, 0.4), work, out(n);
+  for (auto _ : state) {
+    tape.evaluate(x.data(), 0.0, out.data(), work);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["nodes"] = static_cast<double>(g.size());
+  state.counters["bytes_per_node"] = static_cast<double>(sizeof(Node));
+  state.counters["arena_bytes"] = static_cast<double>(g.size() * sizeof(Node));
+  state.counters["index_bytes"] = static_cast<double>(g.indexBytes());
+  state.counters["tape_length"] = static_cast<double>(tape.length());
+}
+
+void BM_NativeRnea(benchmark::State& state) {
+  const Model<double> model = luxo();
+  const int n = model.dofCount();
+  Data<double> data(model);
+  std::vector<double> x(3 * n, 0.4);
+  for (auto _ : state) {
+    const VecX<double>& tau = rnea(model, data, x.data(), x.data() + n, x.data() + 2 * n);
+    benchmark::DoNotOptimize(tau.data());
+  }
+}
+
+BENCHMARK(BM_SymbolicRneaTape)->Unit(benchmark::kNanosecond);
+BENCHMARK(BM_NativeRnea)->Unit(benchmark::kNanosecond);
 BENCHMARK(BM_TapeEvaluate)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_TapeGradient)->Unit(benchmark::kMicrosecond);
 

@@ -224,31 +224,46 @@ Graph* graphOf(Expr a, Expr b) {
   if (a.graph && b.graph && a.graph != b.graph) throw std::logic_error("expr: two graphs");
   return a.graph ? a.graph : b.graph;
 }
+Expr bind(Graph* g, Expr e) { return e.graph ? e : g->constant(e.constant); }
+Expr binary(Op op, Expr a, Expr b) {
+  Graph* g = graphOf(a, b);
+  if (!g) return Expr(apply(op, a.constant, b.constant));
+  return g->make(op, bind(g, a), bind(g, b));
+}
+Expr unaryOp(Op op, Expr a) {
+  if (!a.graph) return Expr(apply(op, a.constant, 0));
+  return a.graph->make(op, a);
+}
 }  // namespace
 
-Expr operator+(Expr a, Expr b) { return graphOf(a, b)->make(Op::Add, a, b); }
-Expr operator-(Expr a, Expr b) { return graphOf(a, b)->make(Op::Sub, a, b); }
-Expr operator*(Expr a, Expr b) { return graphOf(a, b)->make(Op::Mul, a, b); }
-Expr operator/(Expr a, Expr b) { return graphOf(a, b)->make(Op::Div, a, b); }
-Expr operator-(Expr a) { return a.graph->make(Op::Neg, a); }
-Expr operator+(Expr a, double b) { return a + a.graph->constant(b); }
-Expr operator+(double a, Expr b) { return b.graph->constant(a) + b; }
-Expr operator-(Expr a, double b) { return a - a.graph->constant(b); }
-Expr operator-(double a, Expr b) { return b.graph->constant(a) - b; }
-Expr operator*(Expr a, double b) { return a * a.graph->constant(b); }
-Expr operator*(double a, Expr b) { return b.graph->constant(a) * b; }
-Expr operator/(Expr a, double b) { return a / a.graph->constant(b); }
-Expr operator/(double a, Expr b) { return b.graph->constant(a) / b; }
-Expr sin(Expr a) { return a.graph->make(Op::Sin, a); }
-Expr cos(Expr a) { return a.graph->make(Op::Cos, a); }
-Expr tan(Expr a) { return a.graph->make(Op::Tan, a); }
-Expr exp(Expr a) { return a.graph->make(Op::Exp, a); }
-Expr log(Expr a) { return a.graph->make(Op::Log, a); }
-Expr sqrt(Expr a) { return a.graph->make(Op::Sqrt, a); }
-Expr abs(Expr a) { return a.graph->make(Op::Abs, a); }
-Expr pow(Expr a, Expr b) { return graphOf(a, b)->make(Op::Pow, a, b); }
-Expr pow(Expr a, double b) { return a.graph->make(Op::Pow, a, a.graph->constant(b)); }
-Expr min(Expr a, Expr b) { return graphOf(a, b)->make(Op::Min, a, b); }
-Expr max(Expr a, Expr b) { return graphOf(a, b)->make(Op::Max, a, b); }
+Expr& Expr::operator+=(const Expr& o) { return *this = *this + o; }
+Expr& Expr::operator-=(const Expr& o) { return *this = *this - o; }
+Expr& Expr::operator*=(const Expr& o) { return *this = *this * o; }
+Expr& Expr::operator/=(const Expr& o) { return *this = *this / o; }
+
+Expr operator+(Expr a, Expr b) { return binary(Op::Add, a, b); }
+Expr operator-(Expr a, Expr b) { return binary(Op::Sub, a, b); }
+Expr operator*(Expr a, Expr b) { return binary(Op::Mul, a, b); }
+Expr operator/(Expr a, Expr b) { return binary(Op::Div, a, b); }
+Expr operator-(Expr a) { return unaryOp(Op::Neg, a); }
+Expr operator+(Expr a, double b) { return a + Expr(b); }
+Expr operator+(double a, Expr b) { return Expr(a) + b; }
+Expr operator-(Expr a, double b) { return a - Expr(b); }
+Expr operator-(double a, Expr b) { return Expr(a) - b; }
+Expr operator*(Expr a, double b) { return a * Expr(b); }
+Expr operator*(double a, Expr b) { return Expr(a) * b; }
+Expr operator/(Expr a, double b) { return a / Expr(b); }
+Expr operator/(double a, Expr b) { return Expr(a) / b; }
+Expr sin(Expr a) { return unaryOp(Op::Sin, a); }
+Expr cos(Expr a) { return unaryOp(Op::Cos, a); }
+Expr tan(Expr a) { return unaryOp(Op::Tan, a); }
+Expr exp(Expr a) { return unaryOp(Op::Exp, a); }
+Expr log(Expr a) { return unaryOp(Op::Log, a); }
+Expr sqrt(Expr a) { return unaryOp(Op::Sqrt, a); }
+Expr abs(Expr a) { return unaryOp(Op::Abs, a); }
+Expr pow(Expr a, Expr b) { return binary(Op::Pow, a, b); }
+Expr pow(Expr a, double b) { return binary(Op::Pow, a, Expr(b)); }
+Expr min(Expr a, Expr b) { return binary(Op::Min, a, b); }
+Expr max(Expr a, Expr b) { return binary(Op::Max, a, b); }
 
 }  // namespace spacetime::expr

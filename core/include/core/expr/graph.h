@@ -36,10 +36,21 @@ static_assert(sizeof(Node) <= 12, "nodes must stay compact");
 class Graph;
 
 // A handle: the graph and a node id. Cheap to copy; arithmetic builds (simplified, shared)
-// nodes in the handle's graph.
+// nodes in the handle's graph. A handle without a graph is a plain constant (what generic code
+// writes as T(0) or T(1)); it joins a graph when combined with a handle that has one.
 struct Expr {
   Graph* graph = nullptr;
   std::uint32_t id = kNone;
+  double constant = 0;
+
+  Expr() = default;
+  Expr(double c) : constant(c) {}  // NOLINT: implicit, so generic code can write T(0)
+  Expr(Graph* g, std::uint32_t i) : graph(g), id(i) {}
+
+  Expr& operator+=(const Expr& o);
+  Expr& operator-=(const Expr& o);
+  Expr& operator*=(const Expr& o);
+  Expr& operator/=(const Expr& o);
 };
 
 class Graph {
