@@ -67,18 +67,7 @@ DynamicsKernel::DynamicsKernel(std::shared_ptr<const Model<double>> model,
 template <class T>
 VecX<T> DynamicsKernel::generalizedForces(const T* z, bool withMotion, bool withGravity) const {
   const int n = model_->dofCount();
-  std::vector<PointForce<T>> fext;
-  int k = 3 * n;
-  for (const auto& c : contacts_)
-    for (const auto& p : c.points) {
-      PointForce<T> pf;
-      pf.body = c.body;
-      pf.pointIsLocal = true;
-      pf.pointWorld = p.cast<T>();
-      pf.forceWorld = Vec3<T>(z[k], z[k + 1], forceDims_ == 3 ? z[k + 2] : T(0));
-      k += forceDims_;
-      fext.push_back(pf);
-    }
+  const std::vector<PointForce<T>> fext = contactPointForces(contacts_, z + 3 * n, forceDims_);
   Data<T> data(*model_);
   const T* none = nullptr;
   return rnea(*model_, data, z, withMotion ? z + n : none, withMotion ? z + 2 * n : none, fext,

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "dynamics/contact_points.h"
 #include "dynamics/model.h"
 
 namespace spacetime {
@@ -48,12 +49,6 @@ class Kernel {
   void evaluate(const JetChunk* z, JetChunk* rows) const override;      \
   template <class T>                                                    \
   void compute(const T* z, T* rows) const;
-
-// The contact points of one contact term as the dynamics kernel sees them.
-struct ContactPoints {
-  int body = -1;
-  std::vector<Eigen::Vector3d> points;  // body frame
-};
 
 // Inverse dynamics at a sample. z = [q, qd, qdd, f_1 .. f_m] (each contact's points' forces,
 // forceDims components each: x, y or x, y, z in world axes). Rows: the unactuated generalized

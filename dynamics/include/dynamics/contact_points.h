@@ -1,0 +1,36 @@
+// Contact points of a body and the flat layout of their forces that the solver's per-sample
+// inputs and the formula variables share: forceDims components (x, y[, z], world axes) per
+// point, contacts in order.
+#pragma once
+
+#include <vector>
+
+#include "dynamics/model.h"
+
+namespace spacetime {
+
+struct ContactPoints {
+  int body = -1;
+  std::vector<Eigen::Vector3d> points;  // body frame
+};
+
+// The point forces given by `forces` (laid out as above), applied at the body points.
+template <class T>
+std::vector<PointForce<T>> contactPointForces(const std::vector<ContactPoints>& contacts,
+                                              const T* forces, int forceDims) {
+  std::vector<PointForce<T>> out;
+  int k = 0;
+  for (const ContactPoints& c : contacts)
+    for (const Eigen::Vector3d& p : c.points) {
+      PointForce<T> pf;
+      pf.body = c.body;
+      pf.pointIsLocal = true;
+      pf.pointWorld = p.cast<T>();
+      pf.forceWorld = Vec3<T>(forces[k], forces[k + 1], forceDims == 3 ? forces[k + 2] : T(0.0));
+      k += forceDims;
+      out.push_back(pf);
+    }
+  return out;
+}
+
+}  // namespace spacetime
