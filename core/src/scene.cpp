@@ -67,6 +67,7 @@ std::string toString(TermKind k) {
     case TermKind::Rest: return "rest";
     case TermKind::Contact: return "contact";
     case TermKind::Clearance: return "clearance";
+    case TermKind::Formula: return "formula";
   }
   return "?";
 }

@@ -273,7 +273,8 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
                                 {"keyframe", TermKind::Keyframe},
                                 {"rest", TermKind::Rest},
                                 {"contact", TermKind::Contact},
-                                {"clearance", TermKind::Clearance}});
+                                {"clearance", TermKind::Clearance},
+                                {"formula", TermKind::Formula}});
   switch (ts.kind) {
     case TermKind::Pin:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "point", "position",
@@ -292,6 +293,10 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
     case TermKind::Clearance:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "point", "start",
                             "end", "height"});
+      break;
+    case TermKind::Formula:
+      r.allowKeys(t, path, {"id", "type", "enabled", "character", "expression", "relation",
+                            "value", "time", "start", "end"});
       break;
   }
   ts.id = r.identifier(r.required(t, path, "id"), Reader::join(path, "id"));
@@ -381,6 +386,25 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       if (!(ts.end > ts.start)) r.badValue(Reader::join(path, "end"), t["end"], "a time after 'start'");
       ts.height = r.number(r.required(t, path, "height"), Reader::join(path, "height"));
       break;
+    case TermKind::Formula: {
+      ts.expression = r.string(r.required(t, path, "expression"), Reader::join(path, "expression"));
+      if (ts.expression.empty()) r.badValue(Reader::join(path, "expression"), t["expression"], "a formula");
+      if (t.contains("relation"))
+        ts.relation = r.choice<char>(t["relation"], Reader::join(path, "relation"),
+                                     {{"=", '='}, {"<=", '<'}, {">=", '>'}});
+      if (t.contains("value")) ts.value = r.number(t["value"], Reader::join(path, "value"));
+      if (t.contains("time")) {
+        ts.time = readTime("time");
+        if (t.contains("start") || t.contains("end"))
+          r.fail(Reader::join(path, "time"), "give either 'time' or 'start' and 'end', not both");
+      } else {
+        ts.start = readTime("start");
+        ts.end = readTime("end");
+        if (!(ts.end > ts.start)) r.badValue(Reader::join(path, "end"), t["end"], "a time after 'start'");
+        ts.interval = true;
+      }
+      break;
+    }
   }
   return ts;
 }
@@ -459,14 +483,30 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("objective")) {
     const json& o = root["objective"];
-    r.allowKeys(o, "objective", {"effort", "power", "smoothness", "smoothnessOrder"});
+    r.allowKeys(o, "objective", {"effort", "power", "smoothness", "smoothnessOrder", "formulas"});
+    if (o.contains("formulas")) {
+      const json& fs = o["formulas"];
+      if (!fs.is_array()) r.badValue("objective.formulas", fs, "an array of {character, expression, weight}");
+      for (size_t i = 0; i < fs.size(); ++i) {
+        const std::string p = Reader::index("objective.formulas", i);
+        r.allowKeys(fs[i], p, {"character", "expression", "weight"});
+        FormulaObjective f;
+        f.character = r.string(r.required(fs[i], p, "character"), Reader::join(p, "character"));
+        if (!s.character(f.character))
+          r.badValue(Reader::join(p, "character"), f.character, "the id of a character in this scene");
+        f.expression = r.string(r.required(fs[i], p, "expression"), Reader::join(p, "expression"));
+        if (fs[i].contains("weight")) f.weight = r.nonNegative(fs[i]["weight"], Reader::join(p, "weight"));
+        s.objective.formulas.push_back(f);
+      }
+    }
     if (o.contains("effort")) s.objective.effort = r.nonNegative(o["effort"], "objective.effort");
     if (o.contains("power")) s.objective.power = r.nonNegative(o["power"], "objective.power");
     if (o.contains("smoothness"))
       s.objective.smoothness = r.nonNegative(o["smoothness"], "objective.smoothness");
     if (o.contains("smoothnessOrder"))
       s.objective.smoothnessOrder = r.integer(o["smoothnessOrder"], "objective.smoothnessOrder", 2, 3);
-    if (s.objective.effort + s.objective.power + s.objective.smoothness <= 0)
+    if (s.objective.effort + s.objective.power + s.objective.smoothness <= 0 &&
+        s.objective.formulas.empty())
       r.fail("objective", "at least one objective weight must be > 0");
   }
   return s;
@@ -563,6 +603,17 @@ json writeTerm(const TermSpec& t) {
       j["end"] = t.end;
       j["height"] = t.height;
       break;
+    case TermKind::Formula:
+      j["expression"] = t.expression;
+      j["relation"] = t.relation == '=' ? "=" : t.relation == '<' ? "<=" : ">=";
+      j["value"] = t.value;
+      if (t.interval) {
+        j["start"] = t.start;
+        j["end"] = t.end;
+      } else {
+        j["time"] = t.time;
+      }
+      break;
   }
   return j;
 }
@@ -627,6 +678,12 @@ std::string sceneToJson(const Scene& s) {
                        {"power", s.objective.power},
                        {"smoothness", s.objective.smoothness},
                        {"smoothnessOrder", s.objective.smoothnessOrder}};
+  if (!s.objective.formulas.empty()) {
+    json fs = json::array();
+    for (const FormulaObjective& f : s.objective.formulas)
+      fs.push_back({{"character", f.character}, {"expression", f.expression}, {"weight", f.weight}});
+    root["objective"]["formulas"] = fs;
+  }
   return root.dump(2) + "\n";
 }
 

@@ -319,4 +319,23 @@ void JointLimitKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(JointLimitKernel)
 
+// --- FormulaKernel -----------------------------------------------------------------------
+
+FormulaKernel::FormulaKernel(std::shared_ptr<const expr::Tape> tape, int inputs, double time,
+                             RowKind kind, double scale, double offset, std::string label)
+    : tape_(std::move(tape)), time_(time), scale_(scale), offset_(offset) {
+  label_ = std::move(label);
+  inputs_ = inputs;
+  kinds_.assign(1, kind);
+}
+
+template <class T>
+void FormulaKernel::compute(const T* z, T* rows) const {
+  std::vector<T> work;
+  T out;
+  tape_->evaluate(z, T(time_), &out, work);
+  rows[0] = (out - offset_) * scale_;
+}
+SPACETIME_DEFINE_EVALUATORS(FormulaKernel)
+
 }  // namespace spacetime

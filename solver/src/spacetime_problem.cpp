@@ -7,6 +7,7 @@
 
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
+#include "dynamics/formula_environment.h"
 
 namespace spacetime {
 namespace {
@@ -288,6 +289,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
         }
         break;
       case TermKind::Contact: break;  // below, per contact variable set
+      case TermKind::Formula: break;  // addFormulaTerms
     }
   }
 
@@ -310,6 +312,85 @@ bool SpacetimeProblem::assemble(std::string* error) {
       addForceInputs(in, jj, time);
       addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction,
                                                        1.0 / cv.weight, at(label + " cone", time)),
+                  in);
+    }
+  }
+  return addFormulaTerms(error);
+}
+
+std::vector<int> SpacetimeProblem::addSampleInputs(InputMap& in, int c, double t) {
+  std::vector<int> active;
+  for (size_t j = 0; j < contacts_.size(); ++j)
+    if (contacts_[j].character == c && t >= contacts_[j].start - 1e-12 && t <= contacts_[j].end + 1e-12)
+      active.push_back(static_cast<int>(j));
+  for (int order = 0; order < 3; ++order) addMotionInputs(in, c, t, order);
+  for (int j : active) addForceInputs(in, j, t);
+  return active;
+}
+
+std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std::vector<int>& active,
+                                                                const std::string& expression,
+                                                                std::string* error) {
+  std::string key = std::to_string(c) + "|";
+  for (int j : active) key += std::to_string(j) + ",";
+  key += "|" + expression;
+  if (auto it = formulaTapes_.find(key); it != formulaTapes_.end()) return it->second;
+  std::vector<ContactPoints> points;
+  for (int j : active) points.push_back(contacts_[j].points);
+  expr::Graph g;
+  CharacterFormulaEnvironment env(*characters_[c].model, g, points, characters_[c].forceDims);
+  const expr::FormulaResult r = expr::parseFormula(expression, g, env);
+  if (!r.value) {
+    *error = r.error;
+    return nullptr;
+  }
+  auto tape = std::make_shared<const expr::Tape>(expr::Tape::compile(g, {*r.value}, true));
+  formulaTapes_.emplace(key, tape);
+  return tape;
+}
+
+bool SpacetimeProblem::addFormulaTerms(std::string* error) {
+  auto characterIndex = [&](const std::string& id) {
+    for (size_t c = 0; c < scene_.characters.size(); ++c)
+      if (scene_.characters[c].id == id) return static_cast<int>(c);
+    return 0;
+  };
+  for (const TermSpec& t : scene_.terms) {
+    if (!t.enabled || t.kind != TermKind::Formula) continue;
+    const int c = characterIndex(t.character);
+    const std::vector<double> times =
+        t.interval ? intervalTimes(transcription_, t.start, t.end) : std::vector<double>{t.time};
+    for (double time : times) {
+      InputMap in;
+      const std::vector<int> active = addSampleInputs(in, c, time);
+      std::string why;
+      auto tape = formulaTape(c, active, t.expression, &why);
+      if (!tape) {
+        *error = "term '" + t.id + "': formula \"" + t.expression + "\": " + why;
+        return false;
+      }
+      const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
+      const double scale = t.relation == '>' ? -1.0 : 1.0;
+      addResidual(std::make_shared<FormulaKernel>(tape, in.rows(), time, kind, scale, t.value,
+                                                  at("formula '" + t.id + "'", time)),
+                  in);
+    }
+  }
+  for (const FormulaObjective& f : scene_.objective.formulas) {
+    const int c = characterIndex(f.character);
+    for (const Sample& s : transcription_.samples) {
+      if (s.weight <= 0 || f.weight <= 0) continue;
+      InputMap in;
+      const std::vector<int> active = addSampleInputs(in, c, s.time);
+      std::string why;
+      auto tape = formulaTape(c, active, f.expression, &why);
+      if (!tape) {
+        *error = "objective formula \"" + f.expression + "\": " + why;
+        return false;
+      }
+      addResidual(std::make_shared<FormulaKernel>(tape, in.rows(), s.time, RowKind::Objective,
+                                                  std::sqrt(f.weight * s.weight), 0.0,
+                                                  at("objective formula", s.time)),
                   in);
     }
   }

@@ -51,6 +51,54 @@ TEST_P(Particle, OptimumEqualsAnalyticMinimum) {
   EXPECT_LT(v.maxPinError, 1e-8);
 }
 
+// The same problem written only with formulas: pins as formula constraints, the effort as
+// three formula objective terms. The optimum must be the same analytic value.
+TEST_P(Particle, FormulaTermsReachTheSameOptimum) {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + GetParam());
+  ASSERT_TRUE(r.scene) << r.error;
+  Scene scene = *r.scene;
+  std::vector<TermSpec> formulas;
+  for (const TermSpec& pin : scene.terms)
+    for (int axis = 0; axis < 3; ++axis) {
+      TermSpec f;
+      f.id = pin.id + "_" + std::string(1, static_cast<char>('x' + axis));
+      f.kind = TermKind::Formula;
+      f.character = pin.character;
+      f.expression = "pos(ball)." + std::string(1, static_cast<char>('x' + axis));
+      f.value = pin.position[axis];
+      f.time = pin.time;
+      formulas.push_back(f);
+    }
+  scene.terms = formulas;
+  scene.objective.effort = 0;
+  for (const char* dof : {"ball_x", "ball_y", "ball_z"})
+    scene.objective.formulas.push_back({"particle", std::string("tau.") + dof, 1.0});
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  SolverOptions options;
+  options.tolerance = 1e-10;
+  const SolverSummary s = solveSpacetime(*problem, options);
+  EXPECT_TRUE(s.converged) << s.reason;
+  EXPECT_NEAR(s.objective / analyticParticleMinimum(*r.scene), 1.0, 1e-6);
+}
+
+TEST(ParticleFormula, BadFormulaFailsTheBuildWithItsColumn) {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/particle.json");
+  ASSERT_TRUE(r.scene) << r.error;
+  Scene scene = *r.scene;
+  TermSpec f;
+  f.id = "typo";
+  f.kind = TermKind::Formula;
+  f.character = "particle";
+  f.expression = "pos(bal).x";
+  scene.terms.push_back(f);
+  std::string error;
+  EXPECT_FALSE(SpacetimeProblem::build(scene, &error));
+  EXPECT_NE(error.find("term 'typo'"), std::string::npos) << error;
+  EXPECT_NE(error.find("column 5: unknown body 'bal'"), std::string::npos) << error;
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, Particle, ::testing::Values("particle.json", "particle_gravity.json"));
 
 }  // namespace

@@ -71,7 +71,7 @@ struct CharacterSpec {
   const BodySpec* body(const std::string& id) const;
 };
 
-enum class TermKind { Pin, Keyframe, Rest, Contact, Clearance };
+enum class TermKind { Pin, Keyframe, Rest, Contact, Clearance, Formula };
 
 struct TermSpec {
   std::string id;
@@ -89,6 +89,19 @@ struct TermSpec {
   double start = 0, end = 0;                           // contact, clearance interval
   double friction = 1.0;                               // contact: Coulomb coefficient mu
   double height = 0;                                   // clearance: minimum world y
+  // formula: `expression relation value` at `time`, or at every sample of [start, end] when
+  // `interval` is set (see core/expr/formula.h for the language).
+  std::string expression;
+  char relation = '=';  // '=', '<' (<=) or '>' (>=)
+  double value = 0;
+  bool interval = false;
+};
+
+// A user objective term: weight * integral of expression^2 dt.
+struct FormulaObjective {
+  std::string character;
+  std::string expression;
+  double weight = 1;
 };
 
 struct ObjectiveSpec {
@@ -96,6 +109,7 @@ struct ObjectiveSpec {
   double power = 0.0;        // weight of the integral of sum (tau * qd)^2
   double smoothness = 1e-3;  // weight of the integral of |q^(order)|^2 (relative, see solver)
   int smoothnessOrder = 2;   // 2: acceleration, 3: jerk
+  std::vector<FormulaObjective> formulas;
 };
 
 struct TranscriptionSpec {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/expr/tape.h"
 #include "dynamics/contact_points.h"
 #include "dynamics/model.h"
 
@@ -179,6 +180,19 @@ class JointLimitKernel : public Kernel {
  private:
   std::shared_ptr<const Model<double>> model_;
   std::vector<int> dofs_;
+};
+
+// A user formula compiled to a tape, at one time: scale * (f(z, t) - offset). Its inputs are
+// the dynamics kernel's (q, qd, qdd, then the active contacts' forces).
+class FormulaKernel : public Kernel {
+ public:
+  FormulaKernel(std::shared_ptr<const expr::Tape> tape, int inputs, double time, RowKind kind,
+                double scale, double offset, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const expr::Tape> tape_;
+  double time_, scale_, offset_;
 };
 
 }  // namespace spacetime

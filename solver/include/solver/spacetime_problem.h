@@ -13,6 +13,7 @@
 #include <ceres/problem.h>
 
 #include <array>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -126,6 +127,13 @@ class SpacetimeProblem {
   // active at t is used (the instant a contact ends belongs to the contact phase).
   GroupBasis groupBasis(int character, const DofGroup& g, double t, int order) const;
   std::vector<bool> activeContacts(int character, double t) const;
+  // Inputs of a sample (q, qd, qdd, active contacts' forces) and the active contacts.
+  std::vector<int> addSampleInputs(InputMap& in, int character, double t);
+  // A formula of character c compiled for the given active contacts (cached); null and an
+  // error on a bad formula.
+  std::shared_ptr<const expr::Tape> formulaTape(int character, const std::vector<int>& active,
+                                                const std::string& expression, std::string* error);
+  bool addFormulaTerms(std::string* error);
 
   Scene scene_;
   Transcription transcription_;
@@ -135,6 +143,7 @@ class SpacetimeProblem {
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<TermResidual*> residuals_;
   AugmentedLagrangianState al_;
+  std::map<std::string, std::shared_ptr<const expr::Tape>> formulaTapes_;
 };
 
 }  // namespace spacetime
