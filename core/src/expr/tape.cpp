@@ -4,6 +4,9 @@
 #include "core/expr/tape.h"
 
 #include <algorithm>
+#include <iterator>
+
+#include "core/expr/dual.h"
 #include <stdexcept>
 #include <unordered_map>
 
@@ -78,45 +81,44 @@ Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseS
   return tape;
 }
 
-void Tape::gradient(const double* v, double time, std::size_t output, double* grad,
-                    std::size_t count, std::vector<double>& w, std::vector<double>& adj) const {
-  if (reuse_) throw std::logic_error("expr::Tape::gradient needs a tape compiled without slot reuse");
-  std::vector<double> outs(outputs_.size());
-  evaluate(v, time, outs.data(), w);
-  adj.assign(slots_, 0.0);
-  std::fill(grad, grad + count, 0.0);
-  adj[outputs_[output]] = 1.0;
-  for (std::size_t i = code_.size(); i-- > 0;) {
-    const Instruction& in = code_[i];
-    const double a = adj[in.dst];
-    if (a == 0.0) continue;
-    const double x = w[in.a], y = w[in.b], r = w[in.dst];
+void Tape::checkReverse() const {
+  if (reuse_) throw std::logic_error("expr::Tape: reverse mode needs a tape compiled without slot reuse");
+}
+
+void Tape::hessianVectorProduct(const double* x, double time, std::size_t output,
+                                const double* direction, double* product, std::size_t count) const {
+  std::vector<Dual> xd(count), grad(count), work, adjoint;
+  for (std::size_t i = 0; i < count; ++i) xd[i] = Dual(x[i], direction[i]);
+  gradient(xd.data(), Dual(time), output, grad.data(), count, work, adjoint);
+  for (std::size_t i = 0; i < count; ++i) product[i] = grad[i].d;
+}
+
+std::vector<std::vector<std::uint32_t>> Tape::sparsity() const {
+  std::vector<std::vector<std::uint32_t>> deps(slots_);
+  for (const Instruction& in : code_) {
+    std::vector<std::uint32_t> d;
     switch (in.op) {
       case Op::Const:
       case Op::Time: break;
-      case Op::Var:
-        if (in.a < count) grad[in.a] += a;
-        break;
-      case Op::Add: adj[in.a] += a; adj[in.b] += a; break;
-      case Op::Sub: adj[in.a] += a; adj[in.b] -= a; break;
-      case Op::Mul: adj[in.a] += a * y; adj[in.b] += a * x; break;
-      case Op::Div: adj[in.a] += a / y; adj[in.b] -= a * r / y; break;
-      case Op::Neg: adj[in.a] -= a; break;
-      case Op::Sin: adj[in.a] += a * std::cos(x); break;
-      case Op::Cos: adj[in.a] -= a * std::sin(x); break;
-      case Op::Tan: adj[in.a] += a * (1 + r * r); break;
-      case Op::Exp: adj[in.a] += a * r; break;
-      case Op::Log: adj[in.a] += a / x; break;
-      case Op::Sqrt: adj[in.a] += a / (2 * r); break;
-      case Op::Abs: adj[in.a] += x >= 0 ? a : -a; break;
-      case Op::Pow:
-        adj[in.a] += a * y * std::pow(x, y - 1);
-        if (x > 0) adj[in.b] += a * r * std::log(x);
-        break;
-      case Op::Min: (x < y ? adj[in.a] : adj[in.b]) += a; break;
-      case Op::Max: (x < y ? adj[in.b] : adj[in.a]) += a; break;
+      case Op::Var: d = {in.a}; break;
+      default: {
+        const bool binary = in.op == Op::Add || in.op == Op::Sub || in.op == Op::Mul ||
+                            in.op == Op::Div || in.op == Op::Pow || in.op == Op::Min ||
+                            in.op == Op::Max;
+        d = deps[in.a];
+        if (binary) {
+          std::vector<std::uint32_t> merged;
+          std::set_union(d.begin(), d.end(), deps[in.b].begin(), deps[in.b].end(),
+                         std::back_inserter(merged));
+          d = std::move(merged);
+        }
+      }
     }
+    deps[in.dst] = std::move(d);
   }
+  std::vector<std::vector<std::uint32_t>> out;
+  for (std::uint32_t s : outputs_) out.push_back(deps[s]);
+  return out;
 }
 
 }  // namespace spacetime::expr

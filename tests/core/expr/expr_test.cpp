@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <random>
+#include <set>
 
 #include "core/expr/graph.h"
 #include "core/expr/tape.h"
@@ -163,6 +164,70 @@ TEST(Expr, DerivativesMatchFiniteDifferencesInAllModes) {
     }
   }
   EXPECT_EQ(checked, 300 * kVars);
+}
+
+// Forward-over-reverse Hessian-vector products against central differences of the reverse
+// gradient along the direction.
+TEST(Expr, HessianVectorProductsMatchFiniteDifferencesOfTheGradient) {
+  std::mt19937 rng(4);
+  for (unsigned seed = 0; seed < 200; ++seed) {
+    Graph g;
+    const Expr e = randomProgram(seed, variables(g), 20);
+    const Tape tape = Tape::compile(g, {e}, false);
+    const std::vector<double> x = randomPoint(rng), dir = randomPoint(rng);
+    std::vector<double> hv(kVars), gp(kVars), gm(kVars), w, adj;
+    tape.hessianVectorProduct(x.data(), 0.0, 0, dir.data(), hv.data(), kVars);
+    const double h = 1e-6;
+    std::vector<double> xp = x, xm = x;
+    for (int k = 0; k < kVars; ++k) {
+      xp[k] += h * dir[k];
+      xm[k] -= h * dir[k];
+    }
+    tape.gradient(xp.data(), 0.0, 0, gp.data(), kVars, w, adj);
+    tape.gradient(xm.data(), 0.0, 0, gm.data(), kVars, w, adj);
+    for (int k = 0; k < kVars; ++k) {
+      const double fd = (gp[k] - gm[k]) / (2 * h);
+      EXPECT_NEAR(hv[k], fd, 1e-4 * (1 + std::abs(fd))) << g.toString(e);
+    }
+  }
+}
+
+// The sparsity pattern is exactly the set of variables reachable in the graph, and contains
+// every variable whose derivative is numerically non-zero.
+TEST(Expr, SparsityPatternIsTheReachableVariables) {
+  std::mt19937 rng(5);
+  for (unsigned seed = 0; seed < 100; ++seed) {
+    Graph g;
+    std::vector<Expr> vars = variables(g);
+    // Programs over few variables so that some outputs miss some.
+    const Expr e1 = randomProgram(seed, std::vector<Expr>{vars[0], vars[1]}, 8);
+    const Expr e2 = randomProgram(seed + 500, std::vector<Expr>{vars[2], vars[3]}, 8) * vars[1];
+    const Tape tape = Tape::compile(g, {e1, e2}, true);
+    const auto pattern = tape.sparsity();
+    ASSERT_EQ(pattern.size(), 2u);
+    int k = 0;
+    for (const Expr& e : {e1, e2}) {
+      std::set<std::uint32_t> reachable;
+      std::vector<std::uint32_t> stack = {e.id};
+      std::set<std::uint32_t> seen;
+      while (!stack.empty()) {
+        const std::uint32_t id = stack.back();
+        stack.pop_back();
+        if (!seen.insert(id).second) continue;
+        const Node& n = g.node(id);
+        if (n.op == Op::Var) reachable.insert(n.a);
+        else if (n.op != Op::Const && n.op != Op::Time) {
+          stack.push_back(n.a);
+          if (n.b != kNone) stack.push_back(n.b);
+        }
+      }
+      EXPECT_EQ(std::set<std::uint32_t>(pattern[k].begin(), pattern[k].end()), reachable);
+      const std::vector<double> x = randomPoint(rng);
+      for (int v = 0; v < kVars; ++v)
+        if (std::abs(finiteDifference(g, e, x, v)) > 1e-8) EXPECT_TRUE(reachable.count(v));
+      ++k;
+    }
+  }
 }
 
 TEST(Expr, NonSmoothOperationsAwayFromTheirKinks) {

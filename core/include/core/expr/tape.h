@@ -30,9 +30,18 @@ class Tape {
   void evaluate(const T* variables, const T& time, T* outputs, std::vector<T>& work) const;
 
   // Reverse mode: gradient of output `output` with respect to the variables (size `count`).
-  // Requires a tape compiled without slot reuse.
-  void gradient(const double* variables, double time, std::size_t output, double* gradient,
-                std::size_t count, std::vector<double>& work, std::vector<double>& adjoint) const;
+  // Requires a tape compiled without slot reuse. A template so that running it on dual
+  // numbers gives forward-over-reverse second derivatives.
+  template <class T>
+  void gradient(const T* variables, const T& time, std::size_t output, T* gradient,
+                std::size_t count, std::vector<T>& work, std::vector<T>& adjoint) const;
+
+  // Hessian of output `output` times `direction` (forward-over-reverse).
+  void hessianVectorProduct(const double* variables, double time, std::size_t output,
+                            const double* direction, double* product, std::size_t count) const;
+
+  // The sorted variable indices each output depends on (its Jacobian's sparsity pattern).
+  std::vector<std::vector<std::uint32_t>> sparsity() const;
 
  private:
   std::vector<Instruction> code_;
@@ -40,6 +49,7 @@ class Tape {
   std::vector<std::uint32_t> outputs_;  // slots
   std::size_t slots_ = 0;
   bool reuse_ = true;
+  void checkReverse() const;
 };
 
 template <class T>
@@ -79,6 +89,60 @@ void Tape::evaluate(const T* v, const T& time, T* out, std::vector<T>& w) const 
     }
   }
   for (std::size_t k = 0; k < outputs_.size(); ++k) out[k] = w[outputs_[k]];
+}
+
+template <class T>
+void Tape::gradient(const T* v, const T& time, std::size_t output, T* grad, std::size_t count,
+                    std::vector<T>& w, std::vector<T>& adj) const {
+  using std::cos;
+  using std::log;
+  using std::pow;
+  using std::sin;
+  checkReverse();
+  std::vector<T> outs(outputs_.size());
+  evaluate(v, time, outs.data(), w);
+  adj.assign(slots_, T(0.0));
+  for (std::size_t i = 0; i < count; ++i) grad[i] = T(0.0);
+  adj[outputs_[output]] = T(1.0);
+  // Adjoints accumulated in reverse instruction order (Griewank & Walther, ch. 3).
+  for (std::size_t i = code_.size(); i-- > 0;) {
+    const Instruction& in = code_[i];
+    const T a = adj[in.dst];
+    const T& x = w[in.a];
+    const T& y = w[in.b];
+    const T& r = w[in.dst];
+    switch (in.op) {
+      case Op::Const:
+      case Op::Time: break;
+      case Op::Var:
+        if (in.a < count) grad[in.a] += a;
+        break;
+      case Op::Add: adj[in.a] += a; adj[in.b] += a; break;
+      case Op::Sub: adj[in.a] += a; adj[in.b] -= a; break;
+      case Op::Mul: adj[in.a] += a * y; adj[in.b] += a * x; break;
+      case Op::Div: adj[in.a] += a / y; adj[in.b] -= a * r / y; break;
+      case Op::Neg: adj[in.a] -= a; break;
+      case Op::Sin: adj[in.a] += a * cos(x); break;
+      case Op::Cos: adj[in.a] -= a * sin(x); break;
+      case Op::Tan: adj[in.a] += a * (T(1.0) + r * r); break;
+      case Op::Exp: adj[in.a] += a * r; break;
+      case Op::Log: adj[in.a] += a / x; break;
+      case Op::Sqrt: adj[in.a] += a / (T(2.0) * r); break;
+      case Op::Abs:
+        if (x < T(0.0)) adj[in.a] -= a; else adj[in.a] += a;
+        break;
+      case Op::Pow:
+        adj[in.a] += a * y * pow(x, y - T(1.0));
+        if (T(0.0) < x) adj[in.b] += a * r * log(x);
+        break;
+      case Op::Min:
+        if (x < y) adj[in.a] += a; else adj[in.b] += a;
+        break;
+      case Op::Max:
+        if (x < y) adj[in.b] += a; else adj[in.a] += a;
+        break;
+    }
+  }
 }
 
 }  // namespace spacetime::expr
