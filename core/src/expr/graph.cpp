@@ -82,6 +82,25 @@ Expr Graph::time() { return {this, intern(Op::Time, kNone, kNone)}; }
 
 Expr Graph::make(Op op, Expr a, Expr b) { return simplify(op, a, b); }
 
+Expr Graph::spline(const UniformBSpline& layout, const std::vector<std::uint32_t>& controls,
+                   Expr time, int order) {
+  if (static_cast<int>(controls.size()) != layout.controlPointCount())
+    throw std::invalid_argument("expr: spline needs one variable per control point");
+  return splineNode({layout, controls, order, -1}, time);
+}
+
+Expr Graph::splineBasis(const UniformBSpline& layout, int k, Expr time, int order) {
+  return splineNode({layout, {}, order, k}, time);
+}
+
+Expr Graph::splineNode(const SplineTerm& term, Expr time) {
+  if (term.order > 3) return constant(0);  // a cubic's fourth derivative
+  std::uint32_t index = 0;
+  while (index < splines_.size() && !(splines_[index] == term)) ++index;
+  if (index == splines_.size()) splines_.push_back(term);
+  return {this, intern(Op::Spline, time.graph ? time.id : constant(time.constant).id, index)};
+}
+
 Expr Graph::simplify(Op op, Expr a, Expr b) {
   const bool aConst = nodes_[a.id].op == Op::Const;
   const bool bConst = b.id != kNone && nodes_[b.id].op == Op::Const;
@@ -171,6 +190,19 @@ Expr Graph::derivative(Expr e, std::uint32_t variable) {
         else
           r = self * (d(n.b) * log(x) + y * d(n.a) / x);
         break;
+      case Op::Spline: {
+        // d/dx_k sum_j B_j(t) x_j = B_k(t): the basis of control point k, found as the
+        // spline over the indicator of k (one term per occurrence of the variable), plus
+        // the chain rule through time (the next derivative order).
+        SplineTerm term = splines_[n.b];
+        Expr r0 = constant(0);
+        for (size_t k = 0; k < term.controls.size(); ++k)
+          if (term.controls[k] == variable)
+            r0 = r0 + splineBasis(term.spline, static_cast<int>(k), x, term.order);
+        ++term.order;
+        r = r0 + splineNode(term, x) * d(n.a);
+        break;
+      }
       case Op::Min:
       case Op::Max: {
         // The derivative of the selected branch, written without comparisons:
@@ -194,6 +226,9 @@ double Graph::evaluate(Expr e, const std::vector<double>& variables, double t) c
     case Op::Const: return constants_[n.a];
     case Op::Var: return variables.at(n.a);
     case Op::Time: return t;
+    case Op::Spline:
+      return splines_[n.b].evaluate(evaluate({const_cast<Graph*>(this), n.a}, variables, t),
+                                    variables.data());
     default: break;
   }
   const double x = evaluate({const_cast<Graph*>(this), n.a}, variables, t);
@@ -202,8 +237,9 @@ double Graph::evaluate(Expr e, const std::vector<double>& variables, double t) c
 }
 
 std::string Graph::toString(Expr e) const {
-  static const char* names[] = {"c", "v", "t", "+", "-", "*", "/", "neg", "sin", "cos",
-                                "tan", "exp", "log", "sqrt", "abs", "pow", "min", "max"};
+  static const char* names[] = {"c",   "v",    "t",   "+",   "-",   "*",   "/",
+                                "neg", "sin",  "cos", "tan", "exp", "log", "sqrt",
+                                "abs", "pow",  "min", "max", "spline"};
   const Node& n = nodes_[e.id];
   std::ostringstream s;
   switch (n.op) {

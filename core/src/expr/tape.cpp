@@ -12,8 +12,14 @@
 
 namespace spacetime::expr {
 
+namespace {
+// The second child of a node, or kNone (a spline's b is a table index, not a child).
+std::uint32_t secondChild(const Node& n) { return n.op == Op::Spline ? kNone : n.b; }
+}  // namespace
+
 Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseSlots) {
   Tape tape;
+  std::unordered_map<std::uint32_t, std::uint32_t> splineIndex;  // graph -> tape
   tape.reuse_ = reuseSlots;
   // Topological order of the reachable nodes.
   std::vector<std::uint32_t> order;
@@ -32,7 +38,7 @@ Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseS
       continue;
     }
     stack.push_back({id, true});
-    if (n.b != kNone && !position.count(n.b)) stack.push_back({n.b, false});
+    if (secondChild(n) != kNone && !position.count(n.b)) stack.push_back({n.b, false});
     if (!position.count(n.a)) stack.push_back({n.a, false});
   }
   // Last reader of every value (outputs live to the end).
@@ -41,7 +47,7 @@ Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseS
     const Node& n = g.node(order[i]);
     if (n.op == Op::Const || n.op == Op::Var || n.op == Op::Time) continue;
     lastUse[position[n.a]] = i;
-    if (n.b != kNone) lastUse[position[n.b]] = i;
+    if (secondChild(n) != kNone) lastUse[position[n.b]] = i;
   }
   for (const Expr& e : outputs) lastUse[position[e.id]] = order.size();
   // Slots.
@@ -57,6 +63,11 @@ Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseS
       tape.constants_.push_back(g.constantValue(order[i]));
     } else if (n.op == Op::Var) {
       in.a = n.a;
+    } else if (n.op == Op::Spline) {
+      in.a = slotOf[position[n.a]];
+      auto [it, fresh] = splineIndex.emplace(n.b, static_cast<std::uint32_t>(tape.splines_.size()));
+      if (fresh) tape.splines_.push_back(g.splineTerm(n.b));
+      in.b = it->second;
     } else if (n.op != Op::Time) {
       in.a = slotOf[position[n.a]];
       in.b = n.b != kNone ? slotOf[position[n.b]] : 0;
@@ -101,6 +112,15 @@ std::vector<std::vector<std::uint32_t>> Tape::sparsity() const {
       case Op::Const:
       case Op::Time: break;
       case Op::Var: d = {in.a}; break;
+      case Op::Spline: {
+        const SplineTerm& st = splines_[in.b];
+        std::vector<std::uint32_t> controls = st.controls;
+        std::sort(controls.begin(), controls.end());
+        controls.erase(std::unique(controls.begin(), controls.end()), controls.end());
+        std::set_union(controls.begin(), controls.end(), deps[in.a].begin(), deps[in.a].end(),
+                       std::back_inserter(d));
+        break;
+      }
       default: {
         const bool binary = in.op == Op::Add || in.op == Op::Sub || in.op == Op::Mul ||
                             in.op == Op::Div || in.op == Op::Pow || in.op == Op::Min ||

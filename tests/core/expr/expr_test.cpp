@@ -5,6 +5,8 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+
 #include <cmath>
 #include <random>
 #include <set>
@@ -227,6 +229,48 @@ TEST(Expr, SparsityPatternIsTheReachableVariables) {
         if (std::abs(finiteDifference(g, e, x, v)) > 1e-8) EXPECT_TRUE(reachable.count(v));
       ++k;
     }
+  }
+}
+
+// Spline nodes: values and time derivatives against UniformBSpline; derivatives with respect to
+// control points and (through a variable-dependent time) the chain rule, in symbolic, forward
+// and reverse mode, against finite differences.
+TEST(Expr, SplineNodes) {
+  const UniformBSpline layout(0.0, 1.0, 5);
+  const int m = layout.controlPointCount();  // 8 control variables, then x8 shifts time
+  Graph g;
+  std::vector<std::uint32_t> controls;
+  for (int k = 0; k < m; ++k) controls.push_back(k);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> x(m + 1);
+  for (double& v : x) v = u(rng);
+  Eigen::MatrixXd C(m, 1);
+  for (int k = 0; k < m; ++k) C(k, 0) = x[k];
+  for (double t : {0.05, 0.33, 0.5, 0.91}) {
+    for (int order = 0; order <= 3; ++order) {
+      const Expr s = g.spline(layout, controls, g.constant(t), order);
+      EXPECT_NEAR(g.evaluate(s, x), layout.evaluate(C, t, order)(0), 1e-9);
+    }
+    // f = spline(t + 0.1 x8) * spline'(t) : controls and time both depend on variables.
+    const Expr time = g.constant(t) + 0.1 * g.variable(m);
+    const Expr f = g.spline(layout, controls, time, 0) * g.spline(layout, controls, g.constant(t), 1);
+    const Tape full = Tape::compile(g, {f}, false), reused = Tape::compile(g, {f}, true);
+    std::vector<double> grad(m + 1), w, adj;
+    full.gradient(x.data(), 0.0, 0, grad.data(), m + 1, w, adj);
+    using Jet = ceres::Jet<double, 9>;
+    std::vector<Jet> xj(m + 1), wj;
+    for (int k = 0; k <= m; ++k) xj[k] = Jet(x[k], k);
+    Jet out;
+    reused.evaluate(xj.data(), Jet(0.0), &out, wj);
+    for (int k = 0; k <= m; ++k) {
+      const double fd = finiteDifference(g, f, x, k);
+      EXPECT_NEAR(grad[k], fd, 1e-6) << "reverse t=" << t << " k=" << k;
+      EXPECT_NEAR(out.v[k], fd, 1e-6) << "forward t=" << t << " k=" << k;
+      EXPECT_NEAR(g.evaluate(g.derivative(f, k), x), fd, 1e-6) << "symbolic t=" << t << " k=" << k;
+    }
+    const auto pattern = reused.sparsity();
+    EXPECT_EQ(pattern[0].size(), static_cast<size_t>(m + 1));
   }
 }
 

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstdint>
+
+#include "core/bspline.h"
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -22,6 +24,7 @@ enum class Op : std::uint8_t {
   Sin, Cos, Tan, Exp, Log, Sqrt, Abs,
   Pow,  // real exponent; an integer-valued constant exponent evaluates by repeated products
   Min, Max,
+  Spline,  // a: the time child; b: index of a SplineTerm (control variables, derivative order)
 };
 
 inline constexpr std::uint32_t kNone = 0xffffffffu;
@@ -53,9 +56,45 @@ struct Expr {
   Expr& operator/=(const Expr& o);
 };
 
+// A spline node's data: the uniform cubic B-spline layout, the control points' variable
+// indices, and which time derivative it is (the seed's B-spline expressions).
+struct SplineTerm {
+  UniformBSpline spline;
+  std::vector<std::uint32_t> controls;  // variable index of each control point
+  int order = 0;
+  int indicator = -1;  // >= 0: the basis function of that control point (controls unused)
+  bool operator==(const SplineTerm& o) const {
+    return spline.start() == o.spline.start() && spline.end() == o.spline.end() &&
+           spline.segmentCount() == o.spline.segmentCount() && controls == o.controls &&
+           order == o.order && indicator == o.indicator;
+  }
+  // Value at time t given the variables (template: the control values may be Jets).
+  template <class V>
+  V evaluate(double t, const V* variables) const {
+    const BSplineBasis b = spline.basis(t);
+    const auto& w = b.derivative(order);
+    V sum = V(0.0);
+    for (int j = 0; j < 4; ++j) {
+      if (indicator >= 0) {
+        if (b.first + j == indicator) sum = sum + V(w[j]);
+      } else {
+        sum = sum + variables[controls[b.first + j]] * w[j];
+      }
+    }
+    return sum;
+  }
+};
+
 class Graph {
  public:
   Graph();
+
+  // sum_k B_k^(order)(t) x[controls[k]]: a spline of time over control-point variables.
+  Expr spline(const UniformBSpline& layout, const std::vector<std::uint32_t>& controls,
+              Expr time, int order = 0);
+  const SplineTerm& splineTerm(std::uint32_t index) const { return splines_[index]; }
+  // B_k^(order)(t): the basis function of control point k.
+  Expr splineBasis(const UniformBSpline& layout, int k, Expr time, int order);
 
   Expr constant(double value);
   Expr variable(std::uint32_t index);
@@ -93,10 +132,12 @@ class Graph {
     }
   };
   std::uint32_t intern(Op op, std::uint32_t a, std::uint32_t b);
+  Expr splineNode(const SplineTerm& term, Expr time);
   Expr simplify(Op op, Expr a, Expr b);
 
   std::vector<Node> nodes_;
   std::vector<double> constants_;
+  std::vector<SplineTerm> splines_;
   std::unordered_map<Key, std::uint32_t, KeyHash> index_;
   std::unordered_map<std::uint64_t, std::uint32_t> constantIndex_;  // bit pattern -> node
 };

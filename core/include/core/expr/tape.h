@@ -6,8 +6,10 @@
 #pragma once
 
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
+#include "core/expr/dual.h"
 #include "core/expr/graph.h"
 
 namespace spacetime::expr {
@@ -16,6 +18,14 @@ struct Instruction {
   Op op;
   std::uint32_t dst, a, b;  // slots; for Const `a` indexes the tape's constants, for Var a variable
 };
+
+// The plain value of a scalar (double, ceres::Jet, Dual): what a spline's basis is looked up at.
+inline double valueOf(double x) { return x; }
+inline double valueOf(const Dual& x) { return x.v; }
+template <class T>
+auto valueOf(const T& x) -> decltype(x.a) {
+  return x.a;
+}
 
 class Tape {
  public:
@@ -46,6 +56,7 @@ class Tape {
  private:
   std::vector<Instruction> code_;
   std::vector<double> constants_;
+  std::vector<SplineTerm> splines_;
   std::vector<std::uint32_t> outputs_;  // slots
   std::size_t slots_ = 0;
   bool reuse_ = true;
@@ -86,6 +97,21 @@ void Tape::evaluate(const T* v, const T& time, T* out, std::vector<T>& w) const 
       case Op::Pow: d = pow(w[in.a], w[in.b]); break;
       case Op::Min: d = w[in.a] < w[in.b] ? w[in.a] : w[in.b]; break;
       case Op::Max: d = w[in.a] < w[in.b] ? w[in.b] : w[in.a]; break;
+      case Op::Spline: {
+        // The basis is looked up at the time's value; a time carrying derivatives (Jets) adds
+        // the chain rule through the next derivative order.
+        const SplineTerm& st = splines_[in.b];
+        const T tt = w[in.a];
+        const double tv = valueOf(tt);
+        T value = st.evaluate(tv, v);
+        if constexpr (!std::is_same_v<T, double>) {
+          SplineTerm next = st;
+          ++next.order;
+          if (next.order <= 3) value = value + (tt - T(tv)) * next.evaluate(tv, v);
+        }
+        d = value;
+        break;
+      }
     }
   }
   for (std::size_t k = 0; k < outputs_.size(); ++k) out[k] = w[outputs_[k]];
@@ -141,6 +167,22 @@ void Tape::gradient(const T* v, const T& time, std::size_t output, T* grad, std:
       case Op::Max:
         if (x < y) adj[in.b] += a; else adj[in.a] += a;
         break;
+      case Op::Spline: {
+        const SplineTerm& st = splines_[in.b];
+        const double tv = valueOf(x);
+        const BSplineBasis b = st.spline.basis(tv);
+        if (st.indicator < 0)
+          for (int j = 0; j < 4; ++j) {
+            const std::uint32_t var = st.controls[b.first + j];
+            if (var < count) grad[var] += a * b.derivative(st.order)[j];
+          }
+        if (st.order < 3) {
+          SplineTerm next = st;
+          ++next.order;
+          adj[in.a] += a * next.evaluate(tv, v);
+        }
+        break;
+      }
     }
   }
 }
