@@ -10,10 +10,20 @@
 namespace spacetime {
 namespace {
 
-Scene luxoScene() {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/luxo_jump.json");
+Scene luxoScene(const std::string& name = "luxo_jump.json") {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
   EXPECT_TRUE(r.scene) << r.error;
   return *r.scene;
+}
+
+std::unique_ptr<SpacetimeProblem> solved(const Scene& scene, SolverSummary* summary) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  EXPECT_TRUE(problem) << error;
+  SolverOptions options;
+  options.maxOuterIterations = scene.solver.maxOuterIterations;
+  *summary = solveSpacetime(*problem, options);
+  return problem;
 }
 
 // Released at rest with no contact, the optimum keeps the joints still (no torque needed in
@@ -58,6 +68,20 @@ TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
   EXPECT_TRUE(v.contactsInFrictionCone);
   EXPECT_LT(v.maxContactSlip, 1e-6);
   EXPECT_LT(v.maxClearanceViolation, 1e-3);
+}
+
+// Doubling the base's mass must change the motion visibly, not only the torques.
+TEST(Luxo, HeavyBaseChangesTheJump) {
+  SolverSummary normal, heavy;
+  auto a = solved(luxoScene("luxo_jump.json"), &normal);
+  auto b = solved(luxoScene("luxo_heavy.json"), &heavy);
+  ASSERT_TRUE(normal.converged) << normal.reason;
+  ASSERT_TRUE(heavy.converged) << heavy.reason;
+  double largest = 0;  // largest joint-angle difference over the clip (rad)
+  for (double t = 0; t <= 1.2; t += 0.01)
+    largest = std::max(largest, (a->jointState(0, t, 0) - b->jointState(0, t, 0)).tail(3).cwiseAbs().maxCoeff());
+  EXPECT_GT(largest, 0.1);
+  EXPECT_GT(heavy.objective, 1.2 * normal.objective);
 }
 
 }  // namespace
