@@ -292,7 +292,7 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       break;
     case TermKind::Clearance:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "point", "start",
-                            "end", "height"});
+                            "end", "height", "box"});
       break;
     case TermKind::Formula:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "expression", "relation",
@@ -384,7 +384,19 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       ts.start = readTime("start");
       ts.end = readTime("end");
       if (!(ts.end > ts.start)) r.badValue(Reader::join(path, "end"), t["end"], "a time after 'start'");
-      ts.height = r.number(r.required(t, path, "height"), Reader::join(path, "height"));
+      if (t.contains("box")) {
+        const std::string p = Reader::join(path, "box");
+        const json& b = t["box"];
+        r.allowKeys(b, p, {"min", "max"});
+        ts.box = true;
+        ts.boxMin = r.vec3(r.required(b, p, "min"), Reader::join(p, "min"));
+        ts.boxMax = r.vec3(r.required(b, p, "max"), Reader::join(p, "max"));
+        if (!(ts.boxMin.array() < ts.boxMax.array()).all())
+          r.badValue(Reader::join(p, "max"), b["max"], "a corner above 'min' on every axis");
+        if (t.contains("height")) r.fail(Reader::join(path, "height"), "give either 'height' or 'box', not both");
+      } else {
+        ts.height = r.number(r.required(t, path, "height"), Reader::join(path, "height"));
+      }
       break;
     case TermKind::Formula: {
       ts.expression = r.string(r.required(t, path, "expression"), Reader::join(path, "expression"));
@@ -601,7 +613,10 @@ json writeTerm(const TermSpec& t) {
       j["point"] = vec(t.point);
       j["start"] = t.start;
       j["end"] = t.end;
-      j["height"] = t.height;
+      if (t.box)
+        j["box"] = {{"min", vec(t.boxMin)}, {"max", vec(t.boxMax)}};
+      else
+        j["height"] = t.height;
       break;
     case TermKind::Formula:
       j["expression"] = t.expression;

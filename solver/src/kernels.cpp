@@ -290,11 +290,31 @@ ClearanceKernel::ClearanceKernel(std::shared_ptr<const Model<double>> model, int
   kinds_.assign(1, RowKind::Inequality);
 }
 
+ClearanceKernel::ClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
+                                 const Eigen::Vector3d& point, const Eigen::Vector3d& boxMin,
+                                 const Eigen::Vector3d& boxMax, std::string label)
+    : ClearanceKernel(std::move(model), body, point, 0.0, std::move(label)) {
+  box_ = true;
+  boxMin_ = boxMin;
+  boxMax_ = boxMax;
+}
+
 template <class T>
 void ClearanceKernel::compute(const T* z, T* rows) const {
   Data<T> data(*model_);
   forwardKinematics(*model_, data, z);
-  rows[0] = height_ - pointPosition(data, body_, point_).y();
+  const Vec3<T> p = pointPosition(data, body_, point_);
+  if (!box_) {
+    rows[0] = height_ - p.y();
+    return;
+  }
+  T outside = p.x() - boxMax_.x();
+  for (int k = 0; k < 3; ++k) {
+    const T above = p[k] - boxMax_[k], below = boxMin_[k] - p[k];
+    if (above > outside) outside = above;
+    if (below > outside) outside = below;
+  }
+  rows[0] = -outside;
 }
 SPACETIME_DEFINE_EVALUATORS(ClearanceKernel)
 

@@ -283,8 +283,11 @@ bool SpacetimeProblem::assemble(std::string* error) {
         for (double time : intervalTimes(transcription_, t.start, t.end)) {
           InputMap in;
           addMotionInputs(in, ci, time, 0);
-          addResidual(std::make_shared<ClearanceKernel>(cv.model, cv.model->bodyIndex(t.body),
-                                                        t.point, t.height, at(label, time)),
+          const int body = cv.model->bodyIndex(t.body);
+          addResidual(t.box ? std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.boxMin,
+                                                                t.boxMax, at(label, time))
+                            : std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.height,
+                                                                at(label, time)),
                       in);
         }
         break;

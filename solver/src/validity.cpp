@@ -105,9 +105,13 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
         r.maxRestSpeed = std::max(r.maxRestSpeed, problem.jointState(c, t.time, 1).cwiseAbs().maxCoeff());
         break;
       case TermKind::Clearance:
-        for (double s : dense)
-          if (s >= t.start && s <= t.end)
-            r.maxClearanceViolation = std::max(r.maxClearanceViolation, t.height - pointAt(s, t.point).y());
+        for (double s : dense) {
+          if (s < t.start || s > t.end) continue;
+          const Eigen::Vector3d p = pointAt(s, t.point);
+          const double outside = t.box ? std::max((p - t.boxMax).maxCoeff(), (t.boxMin - p).maxCoeff())
+                                       : p.y() - t.height;
+          r.maxClearanceViolation = std::max(r.maxClearanceViolation, -outside);
+        }
         break;
       default: break;
     }

@@ -89,6 +89,8 @@ struct TermSpec {
   double start = 0, end = 0;                           // contact, clearance interval
   double friction = 1.0;                               // contact: Coulomb coefficient mu
   double height = 0;                                   // clearance: minimum world y
+  bool box = false;  // clearance: stay outside the axis-aligned box [boxMin, boxMax] instead
+  Eigen::Vector3d boxMin = Eigen::Vector3d::Zero(), boxMax = Eigen::Vector3d::Zero();
   // formula: `expression relation value` at `time`, or at every sample of [start, end] when
   // `interval` is set (see core/expr/formula.h for the language).
   std::string expression;

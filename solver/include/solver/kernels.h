@@ -157,18 +157,25 @@ class FrictionConeKernel : public Kernel {
   double mu_, scale_;
 };
 
-// A body point stays at or above a height: height - p_y <= 0. z = q.
+// A body point stays at or above a height (height - p_y <= 0), or outside an axis-aligned box:
+// -max(p - boxMax, boxMin - p) <= 0, i.e. beyond at least one face (the active face's row is
+// differentiated; the set outside a box is not convex, so this is a local condition). z = q.
 class ClearanceKernel : public Kernel {
  public:
   ClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
                   const Eigen::Vector3d& point, double height, std::string label);
+  ClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
+                  const Eigen::Vector3d& point, const Eigen::Vector3d& boxMin,
+                  const Eigen::Vector3d& boxMax, std::string label);
   SPACETIME_KERNEL_EVALUATORS
 
  private:
   std::shared_ptr<const Model<double>> model_;
   int body_;
   Eigen::Vector3d point_;
-  double height_;
+  double height_ = 0;
+  bool box_ = false;
+  Eigen::Vector3d boxMin_, boxMax_;
 };
 
 // Joint position limits: q - upper <= 0 and lower - q <= 0 for limited dofs. z = q.
