@@ -132,7 +132,9 @@ TEST(Expr, TapeMatchesDirectEvaluationWithAndWithoutSlotReuse) {
       tape.evaluate(x.data(), 0.0, out.data(), work);
       EXPECT_NEAR(out[0], g.evaluate(e1, x), 1e-12 * (1 + std::abs(out[0])));
       EXPECT_NEAR(out[1], g.evaluate(e2, x), 1e-12 * (1 + std::abs(out[1])));
-      if (reuse) EXPECT_LE(tape.slotCount(), tape.length());
+      if (reuse) {
+        EXPECT_LE(tape.slotCount(), tape.length());
+      }
     }
   }
 }
@@ -226,7 +228,9 @@ TEST(Expr, SparsityPatternIsTheReachableVariables) {
       EXPECT_EQ(std::set<std::uint32_t>(pattern[k].begin(), pattern[k].end()), reachable);
       const std::vector<double> x = randomPoint(rng);
       for (int v = 0; v < kVars; ++v)
-        if (std::abs(finiteDifference(g, e, x, v)) > 1e-8) EXPECT_TRUE(reachable.count(v));
+        if (std::abs(finiteDifference(g, e, x, v)) > 1e-8) {
+          EXPECT_TRUE(reachable.count(v));
+        }
       ++k;
     }
   }
