@@ -46,6 +46,12 @@ class Tape {
   void gradient(const T* variables, const T& time, std::size_t output, T* gradient,
                 std::size_t count, std::vector<T>& work, std::vector<T>& adjoint) const;
 
+  // The double case records each instruction's local partials during the forward pass (in
+  // `work`, after the slots: the tape itself holds no scratch, so threads may share it), so
+  // the reverse pass is only multiply-adds (Griewank & Walther, ch. 3).
+  void gradient(const double* variables, double time, std::size_t output, double* gradient,
+                std::size_t count, std::vector<double>& work, std::vector<double>& adjoint) const;
+
   // Hessian of output `output` times `direction` (forward-over-reverse).
   void hessianVectorProduct(const double* variables, double time, std::size_t output,
                             const double* direction, double* product, std::size_t count) const;
@@ -61,10 +67,19 @@ class Tape {
   std::size_t slots_ = 0;
   bool reuse_ = true;
   void checkReverse() const;
+  // Runs the instructions, leaving every slot's value in w.
+  template <class T>
+  void evaluateSlots(const T* variables, const T& time, std::vector<T>& w) const;
 };
 
 template <class T>
 void Tape::evaluate(const T* v, const T& time, T* out, std::vector<T>& w) const {
+  evaluateSlots(v, time, w);
+  for (std::size_t k = 0; k < outputs_.size(); ++k) out[k] = w[outputs_[k]];
+}
+
+template <class T>
+void Tape::evaluateSlots(const T* v, const T& time, std::vector<T>& w) const {
   using std::abs;
   using std::cos;
   using std::exp;
@@ -114,7 +129,6 @@ void Tape::evaluate(const T* v, const T& time, T* out, std::vector<T>& w) const 
       }
     }
   }
-  for (std::size_t k = 0; k < outputs_.size(); ++k) out[k] = w[outputs_[k]];
 }
 
 template <class T>
@@ -125,8 +139,7 @@ void Tape::gradient(const T* v, const T& time, std::size_t output, T* grad, std:
   using std::pow;
   using std::sin;
   checkReverse();
-  std::vector<T> outs(outputs_.size());
-  evaluate(v, time, outs.data(), w);
+  evaluateSlots(v, time, w);
   adj.assign(slots_, T(0.0));
   for (std::size_t i = 0; i < count; ++i) grad[i] = T(0.0);
   adj[outputs_[output]] = T(1.0);
