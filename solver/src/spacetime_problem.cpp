@@ -199,23 +199,13 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const bool anyLimits = std::any_of(cv.model->bodies.begin(), cv.model->bodies.end(),
                                        [](const Body<double>& b) { return b.hasPositionLimits; });
     for (const Sample& s : transcription_.samples) {
-      // Contacts of this character active at this instant.
-      std::vector<int> active;
-      for (size_t j = 0; j < contacts_.size(); ++j)
-        if (contacts_[j].character == ci && s.time >= contacts_[j].start - 1e-12 &&
-            s.time <= contacts_[j].end + 1e-12)
-          active.push_back(static_cast<int>(j));
       DynamicsKernel::Options o;
       o.effortWeight = obj.effort * s.weight;
       o.powerWeight = obj.power * s.weight;
       o.weightScale = 1.0 / cv.weight;
-      std::vector<ContactPoints> cps;
       InputMap in;
-      for (int order = 0; order < 3; ++order) addMotionInputs(in, ci, s.time, order);
-      for (int j : active) {
-        cps.push_back(contacts_[j].points);
-        addForceInputs(in, j, s.time);
-      }
+      std::vector<ContactPoints> cps;
+      for (int j : addSampleInputs(in, ci, s.time)) cps.push_back(contacts_[j].points);
       addResidual(std::make_shared<DynamicsKernel>(cv.model, cps, cv.forceDims, o,
                                                    at("dynamics " + name, s.time)),
                   in);

@@ -142,11 +142,11 @@ class ContactAnchorKernel : public Kernel {
   double ground_;
 };
 
-// One control point of a contact-force spline lies in the friction cone (the ground only
-// pushes). Because a B-spline stays in the convex hull of its control points and the cone is
-// convex, the force then lies in the cone at every instant, not only at samples. Planar: the
-// exact cone |fx| <= mu fy; 3D: the inscribed pyramid |fx|, |fz| <= mu / sqrt(2) fy.
-// z = the control point's forces (forceDims per point); rows scaled by 1 / (m g).
+// The contact forces of one sample lie in the friction cone (the ground only pushes). Forces
+// are linear between samples and the cone is convex, so they then lie in the cone at every
+// instant, not only at samples. Planar: the exact cone |fx| <= mu fy; 3D: the inscribed
+// pyramid |fx|, |fz| <= mu / sqrt(2) fy. z = the sample's forces (forceDims per point); rows
+// scaled by 1 / (m g).
 class FrictionConeKernel : public Kernel {
  public:
   FrictionConeKernel(int points, int forceDims, double mu, double weightScale, std::string label);

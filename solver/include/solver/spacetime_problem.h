@@ -1,13 +1,13 @@
 // The spacetime transcription of a Scene (Witkin & Kass 1988, with Cohen's 1992 B-spline
 // degrees of freedom): variables, terms and the Ceres problem that holds them.
 //
-// Variables: for each character, the control points of one uniform cubic B-spline per degree
-// of freedom (one parameter block per knot index and dof group); for each contact, the points'
-// ground forces at every sample of the contact interval and the points' ground anchors (x, z). Terms: at every collocation sample, inverse dynamics (the unactuated
-// generalized forces must vanish - physics - and the actuated ones enter the objective), a small
-// smoothness integrand and joint limits; pins, keyframes, rests, contacts (anchored points,
-// forces in the friction cone, forces vanishing where contact begins or ends mid-clip) and
-// clearances at their times.
+// Variables: for each character, the actuated dofs' B-spline control points and the root dofs'
+// Hermite data (see DofGroup); for each contact, the points' ground forces at every sample of
+// the contact interval and the points' ground anchors (x, z). Terms: at every collocation
+// sample, inverse dynamics (the unactuated generalized forces must vanish - physics - and the
+// actuated ones enter the objective), a small smoothness integrand and joint limits; pins,
+// keyframes, rests, contacts (anchored points, forces in the friction cone), clearances and
+// formula terms at their times.
 #pragma once
 
 #include <ceres/problem.h>
