@@ -33,14 +33,18 @@ class ProgressForwarder : public ceres::IterationCallback {
       timedOut = true;
       return ceres::SOLVER_ABORT;
     }
-    if (callback_ && s.iteration > 0) {
+    // Measuring re-evaluates every residual, so reports are throttled to one per 100 ms:
+    // plenty for a progress display, and the solve does not pay for it at every iteration.
+    const double now = secondsSince(start_);
+    if (callback_ && s.iteration > 0 && now - lastReport_ >= 0.1) {
+      lastReport_ = now;
       const ProblemMeasures m = measure(problem_);
       IterationReport r;
       r.outer = outer;
       r.iterations = iterations;
       r.objective = m.objective;
       r.maxViolation = m.maxViolation;
-      r.rho = problem_.residuals().empty() ? 0 : rho;
+      r.rho = rho;
       if (!callback_(r)) {
         cancelled = true;
         return ceres::SOLVER_ABORT;
@@ -60,6 +64,7 @@ class ProgressForwarder : public ceres::IterationCallback {
   const std::atomic<bool>* cancel_;
   Clock::time_point start_;
   double maxSeconds_;
+  double lastReport_ = -1;
 };
 
 bool allFinite(const std::vector<double>& v) {

@@ -56,7 +56,8 @@ struct SolverSummary {
   double linearSolverSeconds = 0;
 };
 
-// Called after every inner iteration (from the solving thread). Return false to cancel.
+// Called after inner iterations, at most every 100 ms (from the solving thread). Return false
+// to cancel.
 using ProgressCallback = std::function<bool(const IterationReport&)>;
 
 SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
