@@ -37,6 +37,25 @@ TEST(SolverRobustness, CancelKeepsAFiniteIterate) {
   EXPECT_LE(s.iterations, iterationsAtCancel + 1);  // stops at the next iteration
 }
 
+// Warm start: re-solving from a converged state (variables, multipliers, penalty) converges
+// at once, to the same optimum.
+TEST(SolverRobustness, WarmStartFromTheSolutionConvergesImmediately) {
+  auto problem = load("particle_gravity.json");
+  const SolverSummary cold = solveSpacetime(*problem, SolverOptions());
+  ASSERT_TRUE(cold.converged) << cold.reason;
+  const SolutionState state = problem->state();
+  auto again = load("particle_gravity.json");
+  ASSERT_TRUE(again->restore(state));
+  SolverOptions warm;
+  warm.warmStart = true;
+  const SolverSummary s = solveSpacetime(*again, warm);
+  EXPECT_TRUE(s.converged) << s.reason;
+  EXPECT_EQ(s.outerIterations, 1);
+  EXPECT_LE(s.iterations, 2);
+  EXPECT_NEAR(s.objective, cold.objective, 1e-9 * cold.objective);
+  EXPECT_LT(cold.iterations + cold.outerIterations, 100);
+}
+
 TEST(SolverRobustness, InvalidOptionsAreReported) {
   auto problem = load("particle.json");
   SolverOptions o;

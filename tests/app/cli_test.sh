@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# spacetime-cli's contract: a good scene writes summary.json, motion.json and the URDF; bad
+# input exits 2 with one line naming the file and the field, and writes nothing.
+set -u
+cli="$1"
+scenes="$2"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$cli" solve "$scenes/particle.json" --out "$tmp/good" --quiet 2>"$tmp/good.err" || fail "good scene exited $?"
+for f in summary.json motion.json particle.urdf; do [ -s "$tmp/good/$f" ] || fail "missing $f"; done
+for key in '"formatVersion"' '"dofs"' '"actuated"' '"times"' '"q"' '"qd"' '"qdd"' '"tau"' '"contacts"' '"urdf"'; do
+  grep -q "$key" "$tmp/good/motion.json" || fail "motion.json lacks $key"
+done
+for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_seconds"' '"max_violation"' '"validity"'; do
+  grep -q "$key" "$tmp/good/summary.json" || fail "summary.json lacks $key"
+done
+
+sed 's/"mass": 1.0/"mass": -1.0/' "$scenes/particle.json" > "$tmp/bad.json"
+"$cli" solve "$tmp/bad.json" --out "$tmp/bad" --quiet 2>"$tmp/bad.err"
+status=$?
+[ "$status" -eq 2 ] || fail "bad scene exited $status, expected 2"
+[ "$(wc -l < "$tmp/bad.err")" -eq 1 ] || fail "expected one line on stderr: $(cat "$tmp/bad.err")"
+grep -q "bad.json: field 'characters\[0\].bodies\[0\].mass': value -1" "$tmp/bad.err" || fail "unclear error: $(cat "$tmp/bad.err")"
+[ ! -e "$tmp/bad" ] || fail "bad input created the output directory"
+
+"$cli" solve "$scenes/particle.json" 2>/dev/null; [ $? -eq 2 ] || fail "missing --out should exit 2"
+echo "1 passed, 0 failed"
