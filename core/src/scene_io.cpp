@@ -495,7 +495,10 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("objective")) {
     const json& o = root["objective"];
-    r.allowKeys(o, "objective", {"effort", "power", "smoothness", "smoothnessOrder", "formulas"});
+    r.allowKeys(o, "objective",
+                {"effort", "power", "smoothness", "smoothnessOrder", "contactForce", "formulas"});
+    if (o.contains("contactForce"))
+      s.objective.contactForce = r.nonNegative(o["contactForce"], "objective.contactForce");
     if (o.contains("formulas")) {
       const json& fs = o["formulas"];
       if (!fs.is_array()) r.badValue("objective.formulas", fs, "an array of {character, expression, weight}");
@@ -692,7 +695,8 @@ std::string sceneToJson(const Scene& s) {
   root["objective"] = {{"effort", s.objective.effort},
                        {"power", s.objective.power},
                        {"smoothness", s.objective.smoothness},
-                       {"smoothnessOrder", s.objective.smoothnessOrder}};
+                       {"smoothnessOrder", s.objective.smoothnessOrder},
+                       {"contactForce", s.objective.contactForce}};
   if (!s.objective.formulas.empty()) {
     json fs = json::array();
     for (const FormulaObjective& f : s.objective.formulas)

@@ -111,6 +111,7 @@ struct ObjectiveSpec {
   double power = 0.0;        // weight of the integral of sum (tau * qd)^2
   double smoothness = 1e-3;  // weight of the integral of |q^(order)|^2 (relative, see solver)
   int smoothnessOrder = 2;   // 2: acceleration, 3: jerk
+  double contactForce = 1e-3;  // weight of the integral of sum |f / (m g)|^2: load sharing
   std::vector<FormulaObjective> formulas;
 };
 
