@@ -303,8 +303,10 @@ bool SpacetimeProblem::assemble(std::string* error) {
     // Several contact points on one rigid body make their forces statically indeterminate
     // (a planar base: 4 unknowns for 3 equations per sample; the 3D base: 12 for 6). A small
     // minimum-norm term picks evenly shared loads and removes that null space, which otherwise
-    // leaves the Levenberg-Marquardt system singular (measured on the Luxo jump: 3292 -> 1907
-    // iterations at weight 1e-3).
+    // leaves the Levenberg-Marquardt system singular (CHOLMOD rejected it on the 3D lamp). At
+    // weight 1e-3 the effect on solve time varies with the local optimum reached: Luxo jump
+    // with 2 threads 3292 -> 1907 iterations; single-threaded jump 15.2 -> 15.4 s, heavy
+    // 14.4 -> 11.4 s, hurdle 12.9 -> 25.0 s.
     for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end)) {
       if (obj.contactForce <= 0 || smp.weight <= 0) continue;
       InputMap in;
