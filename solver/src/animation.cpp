@@ -10,10 +10,9 @@ namespace spacetime {
 std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
                                                      double t) {
   std::vector<PointForce<double>> out;
-  for (size_t j = 0; j < problem.contacts().size(); ++j) {
+  for (int j : problem.activeContacts(c, t)) {
     const ContactVariables& ct = problem.contacts()[j];
-    if (ct.character != c || t < ct.start - 1e-12 || t > ct.end + 1e-12) continue;
-    const std::vector<Eigen::Vector3d> f = problem.contactForces(static_cast<int>(j), t);
+    const std::vector<Eigen::Vector3d> f = problem.contactForces(j, t);
     for (size_t p = 0; p < f.size(); ++p) {
       PointForce<double> pf;
       pf.body = ct.points.body;

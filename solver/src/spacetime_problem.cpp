@@ -12,6 +12,9 @@
 namespace spacetime {
 namespace {
 
+// Two instants closer than this are the same (contact edges, samples, breakpoints).
+constexpr double kTimeTolerance = 1e-9;
+
 std::string at(const std::string& what, double t) {
   std::ostringstream s;
   s << what << " t=" << t;
@@ -37,11 +40,33 @@ std::unique_ptr<SpacetimeProblem> SpacetimeProblem::build(const Scene& scene, st
   return p;
 }
 
-std::vector<bool> SpacetimeProblem::activeContacts(int c, double t) const {
-  std::vector<bool> active;
-  for (const ContactVariables& ct : contacts_)
-    if (ct.character == c) active.push_back(t >= ct.start - 1e-9 && t <= ct.end + 1e-9);
+int SpacetimeProblem::characterIndex(const std::string& id) const {
+  for (size_t c = 0; c < scene_.characters.size(); ++c)
+    if (scene_.characters[c].id == id) return static_cast<int>(c);
+  return 0;
+}
+
+std::vector<int> SpacetimeProblem::activeContacts(int c, double t) const {
+  std::vector<int> active;
+  for (size_t j = 0; j < contacts_.size(); ++j)
+    if (contacts_[j].character == c && t >= contacts_[j].start - kTimeTolerance &&
+        t <= contacts_[j].end + kTimeTolerance)
+      active.push_back(static_cast<int>(j));
   return active;
+}
+
+std::vector<std::pair<double, double>> SpacetimeProblem::flightPhases(int c) const {
+  std::vector<std::pair<double, double>> holds, flights;
+  for (const ContactVariables& ct : contacts_)
+    if (ct.character == c) holds.emplace_back(ct.start, ct.end);
+  std::sort(holds.begin(), holds.end());
+  double cursor = scene_.startTime;
+  for (const auto& [a, b] : holds) {
+    if (a > cursor + kTimeTolerance) flights.emplace_back(cursor, a);
+    cursor = std::max(cursor, b);
+  }
+  if (scene_.endTime > cursor + kTimeTolerance) flights.emplace_back(cursor, scene_.endTime);
+  return flights;
 }
 
 GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order) const {
@@ -168,8 +193,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     }
     ContactVariables cv;
     cv.term = static_cast<int>(ti);
-    for (size_t c = 0; c < scene_.characters.size(); ++c)
-      if (scene_.characters[c].id == t.character) cv.character = static_cast<int>(c);
+    cv.character = characterIndex(t.character);
     const CharacterVariables& ch = characters_[cv.character];
     cv.points.body = ch.model->bodyIndex(t.body);
     cv.points.points = t.points;
@@ -227,9 +251,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
 
   for (const TermSpec& t : scene_.terms) {
     if (!t.enabled) continue;
-    int ci = 0;
-    for (size_t c = 0; c < scene_.characters.size(); ++c)
-      if (scene_.characters[c].id == t.character) ci = static_cast<int>(c);
+    const int ci = characterIndex(t.character);
     const CharacterVariables& cv = characters_[ci];
     const std::string label = toString(t.kind) + " '" + t.id + "'";
     switch (t.kind) {
@@ -291,7 +313,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const int jj = static_cast<int>(j);
     const CharacterVariables& cv = characters_[ct.character];
     const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
-    for (double time : intervalTimes(transcription_, ct.start, ct.end)) {
+    for (double time : ct.times) {
       InputMap in;
       addMotionInputs(in, ct.character, time, 0);
       addAnchorInputs(in, jj);
@@ -327,10 +349,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
 }
 
 std::vector<int> SpacetimeProblem::addSampleInputs(InputMap& in, int c, double t) {
-  std::vector<int> active;
-  for (size_t j = 0; j < contacts_.size(); ++j)
-    if (contacts_[j].character == c && t >= contacts_[j].start - 1e-12 && t <= contacts_[j].end + 1e-12)
-      active.push_back(static_cast<int>(j));
+  const std::vector<int> active = activeContacts(c, t);
   for (int order = 0; order < 3; ++order) addMotionInputs(in, c, t, order);
   for (int j : active) addForceInputs(in, j, t);
   return active;
@@ -358,11 +377,6 @@ std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std
 }
 
 bool SpacetimeProblem::addFormulaTerms(std::string* error) {
-  auto characterIndex = [&](const std::string& id) {
-    for (size_t c = 0; c < scene_.characters.size(); ++c)
-      if (scene_.characters[c].id == id) return static_cast<int>(c);
-    return 0;
-  };
   for (const TermSpec& t : scene_.terms) {
     if (!t.enabled || t.kind != TermKind::Formula) continue;
     const int c = characterIndex(t.character);
@@ -416,25 +430,14 @@ void SpacetimeProblem::initialGuess() {
   for (size_t c = 0; c < characters_.size(); ++c) {
     const CharacterVariables& cv = characters_[c];
     const std::string& id = scene_.characters[c].id;
-    std::vector<std::pair<double, double>> holds;  // contact intervals of this character
-    for (const ContactVariables& ct : contacts_)
-      if (ct.character == static_cast<int>(c)) holds.emplace_back(ct.start, ct.end);
-    auto flightTime = [&](double t) {
-      double held = 0;
-      for (double s = spline.start(); s < t;) {  // measure of held time in [start, t]
-        double next = t;
-        bool inHold = false;
-        for (const auto& [a, b] : holds)
-          if (s >= a && s < b) {
-            inHold = true;
-            next = std::min(next, b);
-          } else if (a > s) {
-            next = std::min(next, a);
-          }
-        if (inHold) held += next - s;
-        s = next;
-      }
-      return t - spline.start() - held;
+    const std::vector<std::pair<double, double>> flights = flightPhases(static_cast<int>(c));
+    const bool hasContacts = std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
+      return ct.character == static_cast<int>(c);
+    });
+    auto flightTime = [&](double t) {  // time spent in flight phases up to t
+      double flown = 0;
+      for (const auto& [a, b] : flights) flown += std::max(0.0, std::min(t, b) - a);
+      return flown;
     };
     std::vector<std::vector<std::pair<double, double>>> keys(cv.dofs);
     for (const TermSpec& t : scene_.terms)
@@ -448,7 +451,7 @@ void SpacetimeProblem::initialGuess() {
       const Body<double>& body = cv.model->bodies[cv.model->dofBody[d]];
       const bool rootDof = body.isVirtual || body.parent < 0 ||
                            cv.model->bodies[body.parent].isVirtual;
-      const bool useFlightTime = rootDof && !holds.empty();
+      const bool useFlightTime = rootDof && hasContacts;
       auto& k = keys[d];
       for (auto& [time, v] : k) time = useFlightTime ? flightTime(time) : time;
       std::sort(k.begin(), k.end());
@@ -467,21 +470,10 @@ void SpacetimeProblem::initialGuess() {
               v = (1 - a) * k[s].second + a * k[s + 1].second;
               break;
             }
-        if (vertical) {
-          // Ballistic height g (t - a)(b - t) / 2 over each flight phase [a, b] between holds.
-          std::vector<double> edges = {spline.start()};
-          for (const auto& [a, b] : holds) edges.push_back(a), edges.push_back(b);
-          edges.push_back(spline.end());
-          std::sort(edges.begin(), edges.end());
-          const double tt = times[i];
-          for (size_t e = 0; e + 1 < edges.size(); ++e) {
-            const double a = edges[e], b = edges[e + 1];
-            if (tt <= a || tt >= b || b - a < 1e-9) continue;
-            bool held = false;
-            for (const auto& [ha, hb] : holds) held = held || (tt > ha && tt < hb);
-            if (!held) v += body.joint.axis.dot(-scene_.gravity) / g * g * (tt - a) * (b - tt) / 2;
-          }
-        }
+        if (vertical)  // ballistic height g (t - a)(b - t) / 2 over each flight phase [a, b]
+          for (const auto& [a, b] : flights)
+            if (times[i] > a && times[i] < b)
+              v += body.joint.axis.dot(-scene_.gravity) * (times[i] - a) * (b - times[i]) / 2;
         values(i, d) = v;
       }
     }
@@ -542,7 +534,8 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
   const ContactVariables& ct = contacts_[j];
   const int points = static_cast<int>(ct.points.points.size());
   std::vector<Eigen::Vector3d> out(points, Eigen::Vector3d::Zero());
-  if (ct.times.empty() || t < ct.times.front() - 1e-12 || t > ct.times.back() + 1e-12) return out;
+  if (ct.times.empty() || t < ct.times.front() - kTimeTolerance || t > ct.times.back() + kTimeTolerance)
+    return out;
   // Linear interpolation between the samples around t.
   size_t i = 0;
   while (i + 2 < ct.times.size() && t > ct.times[i + 1]) ++i;

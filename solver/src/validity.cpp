@@ -73,14 +73,9 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       }
     }
   }
-  auto characterIndex = [&](const std::string& id) {
-    for (size_t c = 0; c < scene.characters.size(); ++c)
-      if (scene.characters[c].id == id) return static_cast<int>(c);
-    return 0;
-  };
   for (const TermSpec& t : scene.terms) {
     if (!t.enabled) continue;
-    const int c = characterIndex(t.character);
+    const int c = problem.characterIndex(t.character);
     const Model<double>& model = *problem.characters()[c].model;
     Data<double> data(model);
     auto pointAt = [&](double time, const Eigen::Vector3d& p) {
@@ -151,24 +146,13 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
     r.contactsPushOnly = r.minNormalForce >= -tol * problem.characters()[0].weight;
     r.contactsInFrictionCone = r.maxConeViolation <= tol;
   }
-  // Flight phases: maximal intervals in which a character that has contacts touches nothing.
+  // Flight phases of every character that has contacts.
   for (size_t c = 0; c < problem.characters().size(); ++c) {
-    std::vector<std::pair<double, double>> holds;
     std::vector<const ContactVariables*> mine;
     for (const ContactVariables& ct : problem.contacts())
-      if (ct.character == static_cast<int>(c)) {
-        holds.emplace_back(ct.start, ct.end);
-        mine.push_back(&ct);
-      }
-    if (holds.empty()) continue;
-    std::sort(holds.begin(), holds.end());
-    std::vector<std::pair<double, double>> flights;
-    double cursor = scene.startTime;
-    for (const auto& [a, b] : holds) {
-      if (a > cursor + 1e-9) flights.emplace_back(cursor, a);
-      cursor = std::max(cursor, b);
-    }
-    if (scene.endTime > cursor + 1e-9) flights.emplace_back(cursor, scene.endTime);
+      if (ct.character == static_cast<int>(c)) mine.push_back(&ct);
+    if (mine.empty()) continue;
+    const std::vector<std::pair<double, double>> flights = problem.flightPhases(static_cast<int>(c));
     const Model<double>& model = *problem.characters()[c].model;
     Data<double> data(model);
     for (const auto& [a, b] : flights) {

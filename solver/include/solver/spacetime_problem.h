@@ -109,6 +109,14 @@ class SpacetimeProblem {
   // World force of each point of a contact at time t (zero outside its interval).
   std::vector<Eigen::Vector3d> contactForces(int contact, double t) const;
 
+  // Index of the character with this id (0 if none: ids are validated by the loader).
+  int characterIndex(const std::string& id) const;
+  // The contacts (indices into contacts()) of character c active at t, interval ends included.
+  std::vector<int> activeContacts(int character, double t) const;
+  // The maximal intervals of the clip in which character c touches nothing: the whole clip for
+  // a character without contacts.
+  std::vector<std::pair<double, double>> flightPhases(int character) const;
+
   SolutionState state() const { return {x_, al_.lambda, al_.rho}; }
   // Restores a state of the same problem shape; false if the shapes differ.
   bool restore(const SolutionState& s);
@@ -126,7 +134,6 @@ class SpacetimeProblem {
   // The basis of a group at t. At a Hermite breakpoint the interval whose contacts are those
   // active at t is used (the instant a contact ends belongs to the contact phase).
   GroupBasis groupBasis(int character, const DofGroup& g, double t, int order) const;
-  std::vector<bool> activeContacts(int character, double t) const;
   // Inputs of a sample (q, qd, qdd, active contacts' forces) and the active contacts.
   std::vector<int> addSampleInputs(InputMap& in, int character, double t);
   // A formula of character c compiled for the given active contacts (cached); null and an
