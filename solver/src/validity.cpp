@@ -131,9 +131,11 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
         const Eigen::Vector3d w = pointPosition(data, ct.points.body, ct.points.points[p]);
         r.maxContactSlip = std::max(r.maxContactSlip, std::hypot(w.x() - anchors[p].x(), w.z() - anchors[p].z()));
         r.maxContactPenetration = std::max(r.maxContactPenetration, scene.groundHeight - w.y());
-        r.minNormalForce = std::min(r.minNormalForce, f[p].y());
-        const double tangential = std::hypot(f[p].x(), f[p].z());
         const double weight = problem.characters()[ct.character].weight;
+        r.minNormalForce = std::min(r.minNormalForce, f[p].y());
+        // Pulling beyond 1e-6 of the contact's own character's weight (the solver's tolerance).
+        if (f[p].y() < -1e-6 * weight) r.contactsPushOnly = false;
+        const double tangential = std::hypot(f[p].x(), f[p].z());
         // The 3D cone is imposed as its inscribed pyramid, so this check is conservative there.
         r.maxConeViolation = std::max(r.maxConeViolation, (tangential - ct.friction * f[p].y()) / weight);
         if (f[p].y() >= 0.01 * weight)
@@ -141,11 +143,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       }
     }
   }
-  if (!problem.contacts().empty()) {
-    const double tol = 1e-6;
-    r.contactsPushOnly = r.minNormalForce >= -tol * problem.characters()[0].weight;
-    r.contactsInFrictionCone = r.maxConeViolation <= tol;
-  }
+  r.contactsInFrictionCone = r.maxConeViolation <= 1e-6;  // fraction of weight, as above
   // Flight phases of every character that has contacts.
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     std::vector<const ContactVariables*> mine;
