@@ -98,17 +98,28 @@ std::string toString(SolveStatus s) {
   return "?";
 }
 
-ProblemMeasures measure(const SpacetimeProblem& problem) {
+namespace {
+
+// Every residual's raw rows at the current variables, residual by residual.
+std::vector<std::vector<double>> rawRows(const SpacetimeProblem& problem) {
+  std::vector<std::vector<double>> rows;
+  rows.reserve(problem.residuals().size());
+  for (const TermResidual* r : problem.residuals()) rows.push_back(r->rawRowsNow());
+  return rows;
+}
+
+ProblemMeasures measure(const SpacetimeProblem& problem, const std::vector<std::vector<double>>& rows) {
   ProblemMeasures m;
-  for (const TermResidual* r : problem.residuals()) {
-    const std::vector<double> rows = r->rawRowsNow();
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const TermResidual* r = problem.residuals()[k];
     const auto& kinds = r->kernel().rowKinds();
-    for (size_t i = 0; i < rows.size(); ++i) {
+    for (size_t i = 0; i < rows[k].size(); ++i) {
+      const double row = rows[k][i];
       double v = 0;
       switch (kinds[i]) {
-        case RowKind::Objective: m.objective += rows[i] * rows[i]; continue;
-        case RowKind::Equality: v = std::abs(rows[i]); break;
-        case RowKind::Inequality: v = std::max(0.0, rows[i]); break;
+        case RowKind::Objective: m.objective += row * row; continue;
+        case RowKind::Equality: v = std::abs(row); break;
+        case RowKind::Inequality: v = std::max(0.0, row); break;
       }
       if (!(v <= m.maxViolation)) {  // also catches NaN
         m.maxViolation = v;
@@ -118,6 +129,10 @@ ProblemMeasures measure(const SpacetimeProblem& problem) {
   }
   return m;
 }
+
+}  // namespace
+
+ProblemMeasures measure(const SpacetimeProblem& problem) { return measure(problem, rawRows(problem)); }
 
 SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
                              const ProgressCallback& callback, const std::atomic<bool>* cancel) {
@@ -176,7 +191,8 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       summary.reason = "stopped after the time limit of " + std::to_string(options.maxSeconds) + " s";
       break;
     }
-    m = measure(problem);
+    const std::vector<std::vector<double>> rows = rawRows(problem);
+    m = measure(problem, rows);
     if (cs.termination_type == ceres::FAILURE || !std::isfinite(m.objective) ||
         !std::isfinite(m.maxViolation) || !allFinite(problem.variables())) {
       problem.restore(lastGood);
@@ -194,13 +210,13 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       break;
     }
     // First-order multiplier update (Nocedal & Wright eq. 17.39; 17.67 for inequalities).
-    for (const TermResidual* r : problem.residuals()) {
-      const std::vector<double> rows = r->rawRowsNow();
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const TermResidual* r = problem.residuals()[k];
       const auto& kinds = r->kernel().rowKinds();
-      for (size_t i = 0; i < rows.size(); ++i) {
+      for (size_t i = 0; i < rows[k].size(); ++i) {
         double& lambda = al.lambda[r->firstMultiplier() + i];
-        if (kinds[i] == RowKind::Equality) lambda += al.rho * rows[i];
-        else if (kinds[i] == RowKind::Inequality) lambda = std::max(0.0, lambda + al.rho * rows[i]);
+        if (kinds[i] == RowKind::Equality) lambda += al.rho * rows[k][i];
+        else if (kinds[i] == RowKind::Inequality) lambda = std::max(0.0, lambda + al.rho * rows[k][i]);
       }
     }
     if (m.maxViolation > 0.25 * previousViolation)
@@ -208,8 +224,8 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     previousViolation = m.maxViolation;
   }
   // Constraint projection: land exactly on the constraints from the AL's near-optimal point.
+  // m is current here: the loop measured after the last inner solve and nothing moved since.
   if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Converged) {
-    m = measure(problem);
     if (m.maxViolation > options.tolerance) {
       ceres::Solver::Options po = co;
       po.max_num_iterations = options.maxProjectionIterations;
