@@ -6,6 +6,7 @@
 
 #include <random>
 
+#include "../shipped_scene.h"
 #include "core/expr/eigen_scalar.h"
 #include "core/expr/graph.h"
 #include "core/expr/tape.h"
@@ -64,8 +65,8 @@ void BM_TapeGradient(benchmark::State& state) {
 }
 
 Model<double> luxo() {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/luxo_jump.json");
-  return buildModel(r.scene->characters[0], r.scene->gravity);
+  const Scene scene = testing::shippedScene("luxo_jump.json");
+  return buildModel(scene.characters[0], scene.gravity);
 }
 
 // The Luxo lamp's RNEA built symbolically and compiled; compare with BM_NativeRnea.

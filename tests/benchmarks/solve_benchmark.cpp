@@ -8,20 +8,15 @@
 #include <ceres/crs_matrix.h>
 #include <ceres/problem.h>
 
+#include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 
 namespace spacetime {
 namespace {
 
-Scene loadScene(const std::string& name) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
-  if (!r.scene) throw std::runtime_error(r.error);
-  return *r.scene;
-}
-
 void BM_Solve(benchmark::State& state, const std::string& name) {
-  const Scene scene = loadScene(name);
+  const Scene scene = testing::shippedScene(name);
   bool converged = true;
   double violation = 0;
   for (auto _ : state) {
@@ -43,7 +38,7 @@ void BM_Solve(benchmark::State& state, const std::string& name) {
 }
 
 void BM_LuxoJacobian(benchmark::State& state) {
-  const Scene scene = loadScene("luxo_jump.json");
+  const Scene scene = testing::shippedScene("luxo_jump.json");
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
   double cost = 0;

@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "../shipped_scene.h"
 #include "core/expr/tape.h"
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
@@ -16,9 +17,8 @@ namespace spacetime {
 namespace {
 
 Model<double> luxo() {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/luxo_jump.json");
-  EXPECT_TRUE(r.scene) << r.error;
-  return buildModel(r.scene->characters[0], r.scene->gravity);
+  const Scene scene = testing::shippedScene("luxo_jump.json");
+  return buildModel(scene.characters[0], scene.gravity);
 }
 
 TEST(Formula, ValuesMatchNativeComputations) {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <random>
 
+#include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
@@ -63,9 +64,8 @@ double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d&
 
 TEST(MujocoInverse, ShippedCharactersAgree) {
   for (const char* scene : {"luxo_jump.json", "luxo_heavy.json", "luxo_3d.json", "particle_gravity.json"}) {
-    const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + scene);
-    ASSERT_TRUE(r.scene) << r.error;
-    EXPECT_LT(worstRelativeError(r.scene->characters[0], r.scene->gravity, 50, 7), 1e-9) << scene;
+    const Scene s = testing::shippedScene(scene);
+    EXPECT_LT(worstRelativeError(s.characters[0], s.gravity, 50, 7), 1e-9) << scene;
   }
 }
 

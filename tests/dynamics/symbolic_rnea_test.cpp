@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "../shipped_scene.h"
 #include "core/expr/eigen_scalar.h"
 #include "core/expr/tape.h"
 #include "core/scene_io.h"
@@ -32,9 +33,8 @@ std::vector<Expr> symbolicRnea(expr::Graph& g, const Model<double>& model) {
 class SymbolicRnea : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(SymbolicRnea, CompiledTapeEqualsNativeAndRebuildAddsNoNodes) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + GetParam());
-  ASSERT_TRUE(r.scene) << r.error;
-  const Model<double> model = buildModel(r.scene->characters[0], r.scene->gravity);
+  const Scene scene = testing::shippedScene(GetParam());
+  const Model<double> model = buildModel(scene.characters[0], scene.gravity);
   const int n = model.dofCount();
   expr::Graph g;
   const std::vector<Expr> tau = symbolicRnea(g, model);

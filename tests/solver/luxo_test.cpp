@@ -3,6 +3,7 @@
 // friction cone) checked on the solved motion.
 #include <gtest/gtest.h>
 
+#include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/validity.h"
@@ -10,11 +11,7 @@
 namespace spacetime {
 namespace {
 
-Scene luxoScene(const std::string& name = "luxo_jump.json") {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
-  EXPECT_TRUE(r.scene) << r.error;
-  return *r.scene;
-}
+Scene luxoScene(const std::string& name = "luxo_jump.json") { return testing::shippedScene(name); }
 
 std::unique_ptr<SpacetimeProblem> solved(const Scene& scene, SolverSummary* summary) {
   std::string error;

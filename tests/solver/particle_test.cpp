@@ -12,6 +12,7 @@
 
 #include <cstdio>
 
+#include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 #include "dynamics/algorithms.h"
@@ -39,16 +40,15 @@ double analyticParticleMinimum(const Scene& scene) {
 class Particle : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(Particle, OptimumEqualsAnalyticMinimum) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + GetParam());
-  ASSERT_TRUE(r.scene) << r.error;
+  const Scene shipped = testing::shippedScene(GetParam());
   std::string error;
-  auto problem = SpacetimeProblem::build(*r.scene, &error);
+  auto problem = SpacetimeProblem::build(shipped, &error);
   ASSERT_TRUE(problem) << error;
   SolverOptions options;
   options.tolerance = 1e-10;
   const SolverSummary s = solveSpacetime(*problem, options);
   EXPECT_TRUE(s.converged) << s.reason;
-  const double expected = analyticParticleMinimum(*r.scene);
+  const double expected = analyticParticleMinimum(shipped);
   EXPECT_NEAR(s.objective / expected, 1.0, 1e-6) << s.objective << " vs " << expected;
   const ValidityReport v = checkValidity(*problem);
   EXPECT_LT(v.maxPinError, 1e-8);
@@ -57,9 +57,8 @@ TEST_P(Particle, OptimumEqualsAnalyticMinimum) {
 // The same problem written only with formulas: pins as formula constraints, the effort as
 // three formula objective terms. The optimum must be the same analytic value.
 TEST_P(Particle, FormulaTermsReachTheSameOptimum) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + GetParam());
-  ASSERT_TRUE(r.scene) << r.error;
-  Scene scene = *r.scene;
+  const Scene shipped = testing::shippedScene(GetParam());
+  Scene scene = shipped;
   std::vector<TermSpec> formulas;
   for (const TermSpec& pin : scene.terms)
     for (int axis = 0; axis < 3; ++axis) {
@@ -83,13 +82,11 @@ TEST_P(Particle, FormulaTermsReachTheSameOptimum) {
   options.tolerance = 1e-10;
   const SolverSummary s = solveSpacetime(*problem, options);
   EXPECT_TRUE(s.converged) << s.reason;
-  EXPECT_NEAR(s.objective / analyticParticleMinimum(*r.scene), 1.0, 1e-6);
+  EXPECT_NEAR(s.objective / analyticParticleMinimum(shipped), 1.0, 1e-6);
 }
 
 TEST(ParticleFormula, BadFormulaFailsTheBuildWithItsColumn) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/particle.json");
-  ASSERT_TRUE(r.scene) << r.error;
-  Scene scene = *r.scene;
+  Scene scene = testing::shippedScene("particle.json");
   TermSpec f;
   f.id = "typo";
   f.kind = TermKind::Formula;
@@ -107,9 +104,7 @@ TEST(ParticleFormula, BadFormulaFailsTheBuildWithItsColumn) {
 // solver can also find a path that tunnels through it between samples, which the validity
 // report flags.)
 TEST(ParticleClearance, PassesOverABox) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/particle.json");
-  ASSERT_TRUE(r.scene) << r.error;
-  Scene scene = *r.scene;
+  Scene scene = testing::shippedScene("particle.json");
   scene.terms[1].position = Eigen::Vector3d(1, 0.6, 0);
   scene.terms[2].position = Eigen::Vector3d(2, 0, 0);
   scene.transcription.controlPointsPerSecond = 40;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 
@@ -11,11 +12,10 @@ namespace spacetime {
 namespace {
 
 std::unique_ptr<SpacetimeProblem> load(const char* name, Scene* sceneOut = nullptr) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
-  EXPECT_TRUE(r.scene) << r.error;
-  if (sceneOut) *sceneOut = *r.scene;
+  const Scene scene = testing::shippedScene(name);
+  if (sceneOut) *sceneOut = scene;
   std::string error;
-  return SpacetimeProblem::build(*r.scene, &error);
+  return SpacetimeProblem::build(scene, &error);
 }
 
 TEST(SolverRobustness, CancelKeepsAFiniteIterate) {

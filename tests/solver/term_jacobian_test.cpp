@@ -6,6 +6,7 @@
 #include <random>
 #include <set>
 
+#include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/spacetime_problem.h"
 
@@ -15,10 +16,8 @@ namespace {
 class TermJacobians : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(TermJacobians, MatchFiniteDifferences) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + GetParam());
-  ASSERT_TRUE(r.scene) << r.error;
   std::string error;
-  auto problem = SpacetimeProblem::build(*r.scene, &error);
+  auto problem = SpacetimeProblem::build(testing::shippedScene(GetParam()), &error);
   ASSERT_TRUE(problem) << error;
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.05);

@@ -1,0 +1,18 @@
+// Loads a scene shipped in resources/scenes/ for a test or benchmark. A scene that does not
+// load throws with the loader's message, which fails the test that asked for it.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "core/scene_io.h"
+
+namespace spacetime::testing {
+
+inline Scene shippedScene(const std::string& name) {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
+  if (!r.scene) throw std::runtime_error(r.error);
+  return *r.scene;
+}
+
+}  // namespace spacetime::testing
