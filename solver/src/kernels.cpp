@@ -8,6 +8,16 @@
 
 namespace spacetime {
 
+namespace {
+// Jets of z with unit directions seeded on inputs [start, end) (forward mode, one chunk).
+void seedChunk(const double* z, int n, int start, int end, JetChunk* zj) {
+  for (int i = 0; i < n; ++i) {
+    zj[i] = JetChunk(z[i]);
+    if (i >= start && i < end) zj[i].v[i - start] = 1.0;
+  }
+}
+}  // namespace
+
 void Kernel::evaluateWithJacobian(const double* z, double* rows, double* jacobian) const {
   const int n = inputs_, m = rowCount();
   std::vector<JetChunk> zj(n), out(m);
@@ -17,10 +27,7 @@ void Kernel::evaluateWithJacobian(const double* z, double* rows, double* jacobia
   }
   // Forward mode in chunks of kJetWidth seeded directions.
   for (int start = 0; start < n; start += kJetWidth) {
-    for (int i = 0; i < n; ++i) {
-      zj[i] = JetChunk(z[i]);
-      if (i >= start && i < start + kJetWidth) zj[i].v[i - start] = 1.0;
-    }
+    seedChunk(z, n, start, std::min(start + kJetWidth, n), zj.data());
     evaluate(zj.data(), out.data());
     const int width = std::min(kJetWidth, n - start);
     for (int r = 0; r < m; ++r) {
@@ -75,23 +82,35 @@ VecX<T> DynamicsKernel::generalizedForces(const T* z, bool withMotion, bool with
 }
 
 template <class T>
-void DynamicsKernel::compute(const T* z, T* rows) const {
-  const int n = model_->dofCount();
-  const T* qd = z + n;
-  const VecX<T> tau = generalizedForces(z);
-  const double sqrtEffort = std::sqrt(options_.effortWeight);
-  const double sqrtPower = std::sqrt(options_.powerWeight);
-  for (size_t r = 0; r < rows_.size(); ++r) {
-    const auto [row, d] = rows_[r];
-    const Body<double>& b = model_->bodies[model_->dofBody[d]];
-    switch (row) {
-      case Row::Physics: rows[r] = tau[d] * options_.weightScale; break;
-      case Row::Effort: rows[r] = tau[d] * sqrtEffort; break;
-      case Row::Power: rows[r] = tau[d] * qd[d] * sqrtPower; break;
-      case Row::TorqueUpper: rows[r] = (tau[d] - b.effortLimit) * options_.weightScale; break;
-      case Row::TorqueLower: rows[r] = (-tau[d] - b.effortLimit) * options_.weightScale; break;
-    }
+T DynamicsKernel::rowValue(size_t r, const VecX<T>& tau, const T* qd) const {
+  const auto [row, d] = rows_[r];
+  const double limit = model_->bodies[model_->dofBody[d]].effortLimit;
+  switch (row) {
+    case Row::Physics: return tau[d] * options_.weightScale;
+    case Row::Effort: return tau[d] * std::sqrt(options_.effortWeight);
+    case Row::Power: return tau[d] * qd[d] * std::sqrt(options_.powerWeight);
+    case Row::TorqueUpper: return (tau[d] - limit) * options_.weightScale;
+    case Row::TorqueLower: return (-tau[d] - limit) * options_.weightScale;
   }
+  return T(0.0);
+}
+
+double DynamicsKernel::rowSlope(size_t r, const double* qd) const {
+  const auto [row, d] = rows_[r];
+  switch (row) {
+    case Row::Physics:
+    case Row::TorqueUpper: return options_.weightScale;
+    case Row::TorqueLower: return -options_.weightScale;
+    case Row::Effort: return std::sqrt(options_.effortWeight);
+    case Row::Power: return qd[d] * std::sqrt(options_.powerWeight);
+  }
+  return 0;
+}
+
+template <class T>
+void DynamicsKernel::compute(const T* z, T* rows) const {
+  const VecX<T> tau = generalizedForces(z);
+  for (size_t r = 0; r < rows_.size(); ++r) rows[r] = rowValue(r, tau, z + model_->dofCount());
 }
 
 void DynamicsKernel::evaluateWithJacobian(const double* z, double* rows, double* jacobian) const {
@@ -101,10 +120,7 @@ void DynamicsKernel::evaluateWithJacobian(const double* z, double* rows, double*
   // Forward mode over (q, qd); qdd and forces enter as constants.
   std::vector<JetChunk> zj(nz);
   for (int start = 0; start < 2 * n; start += kJetWidth) {
-    for (int i = 0; i < nz; ++i) {
-      zj[i] = JetChunk(z[i]);
-      if (i >= start && i < std::min(start + kJetWidth, 2 * n)) zj[i].v[i - start] = 1.0;
-    }
+    seedChunk(z, nz, start, std::min(start + kJetWidth, 2 * n), zj.data());
     const VecX<JetChunk> t = generalizedForces(zj.data());
     const int width = std::min(kJetWidth, 2 * n - start);
     for (int d = 0; d < n; ++d) {
@@ -122,37 +138,15 @@ void DynamicsKernel::evaluateWithJacobian(const double* z, double* rows, double*
     unit[k] = 1.0;
     dtau.col(k) = generalizedForces(unit.data(), /*withMotion=*/false, /*withGravity=*/false);
   }
+  // Every row is slope * tau[d] (+ a constant), except that power also depends on qd[d].
   const double* qd = z + n;
-  const double sqrtEffort = std::sqrt(options_.effortWeight);
-  const double sqrtPower = std::sqrt(options_.powerWeight);
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
       jacobian, rowCount(), nz);
   for (size_t r = 0; r < rows_.size(); ++r) {
     const auto [row, d] = rows_[r];
-    const Body<double>& b = model_->bodies[model_->dofBody[d]];
-    switch (row) {
-      case Row::Physics:
-        rows[r] = tau[d] * options_.weightScale;
-        J.row(r) = dtau.row(d) * options_.weightScale;
-        break;
-      case Row::Effort:
-        rows[r] = tau[d] * sqrtEffort;
-        J.row(r) = dtau.row(d) * sqrtEffort;
-        break;
-      case Row::Power:
-        rows[r] = tau[d] * qd[d] * sqrtPower;
-        J.row(r) = dtau.row(d) * (qd[d] * sqrtPower);
-        J(r, n + d) += tau[d] * sqrtPower;
-        break;
-      case Row::TorqueUpper:
-        rows[r] = (tau[d] - b.effortLimit) * options_.weightScale;
-        J.row(r) = dtau.row(d) * options_.weightScale;
-        break;
-      case Row::TorqueLower:
-        rows[r] = (-tau[d] - b.effortLimit) * options_.weightScale;
-        J.row(r) = -dtau.row(d) * options_.weightScale;
-        break;
-    }
+    rows[r] = rowValue(r, tau, qd);
+    J.row(r) = dtau.row(d) * rowSlope(r, qd);
+    if (row == Row::Power) J(r, n + d) += tau[d] * std::sqrt(options_.powerWeight);
   }
 }
 SPACETIME_DEFINE_EVALUATORS(DynamicsKernel)

@@ -75,6 +75,10 @@ class DynamicsKernel : public Kernel {
  private:
   template <class T>
   VecX<T> generalizedForces(const T* z, bool withMotion = true, bool withGravity = true) const;
+  // Row r's value from the generalized forces and qd; its slope in tau[dof of r].
+  template <class T>
+  T rowValue(size_t r, const VecX<T>& tau, const T* qd) const;
+  double rowSlope(size_t r, const double* qd) const;
   enum class Row { Physics, Effort, Power, TorqueUpper, TorqueLower };
   std::shared_ptr<const Model<double>> model_;
   std::vector<ContactPoints> contacts_;
