@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <stdexcept>
 
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
@@ -39,15 +40,23 @@ double analyticParticleMinimum(const Scene& scene) {
 
 class Particle : public ::testing::TestWithParam<const char*> {};
 
-TEST_P(Particle, OptimumEqualsAnalyticMinimum) {
-  const Scene shipped = testing::shippedScene(GetParam());
+// Builds and solves a scene to a tight tolerance; the test fails if it does not build or
+// converge.
+std::unique_ptr<SpacetimeProblem> solveTightly(const Scene& scene, SolverSummary* summary) {
   std::string error;
-  auto problem = SpacetimeProblem::build(shipped, &error);
-  ASSERT_TRUE(problem) << error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  if (!problem) throw std::runtime_error(error);
   SolverOptions options;
   options.tolerance = 1e-10;
-  const SolverSummary s = solveSpacetime(*problem, options);
-  EXPECT_TRUE(s.converged) << s.reason;
+  *summary = solveSpacetime(*problem, options);
+  EXPECT_TRUE(summary->converged) << summary->reason;
+  return problem;
+}
+
+TEST_P(Particle, OptimumEqualsAnalyticMinimum) {
+  const Scene shipped = testing::shippedScene(GetParam());
+  SolverSummary s;
+  const auto problem = solveTightly(shipped, &s);
   const double expected = analyticParticleMinimum(shipped);
   EXPECT_NEAR(s.objective / expected, 1.0, 1e-6) << s.objective << " vs " << expected;
   const ValidityReport v = checkValidity(*problem);
@@ -75,13 +84,8 @@ TEST_P(Particle, FormulaTermsReachTheSameOptimum) {
   scene.objective.effort = 0;
   for (const char* dof : {"ball_x", "ball_y", "ball_z"})
     scene.objective.formulas.push_back({"particle", std::string("tau.") + dof, 1.0});
-  std::string error;
-  auto problem = SpacetimeProblem::build(scene, &error);
-  ASSERT_TRUE(problem) << error;
-  SolverOptions options;
-  options.tolerance = 1e-10;
-  const SolverSummary s = solveSpacetime(*problem, options);
-  EXPECT_TRUE(s.converged) << s.reason;
+  SolverSummary s;
+  solveTightly(scene, &s);
   EXPECT_NEAR(s.objective / analyticParticleMinimum(shipped), 1.0, 1e-6);
 }
 
