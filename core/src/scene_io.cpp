@@ -524,6 +524,23 @@ Scene readScene(const Reader& r, const json& root) {
         s.objective.formulas.empty())
       r.fail("objective", "at least one objective weight must be > 0");
   }
+  if (root.contains("solution")) {
+    const json& j = root["solution"];
+    r.allowKeys(j, "solution", {"variables", "multipliers", "rho", "converged"});
+    StoredSolution sol;
+    auto numbers = [&](const char* key, std::vector<double>& out) {
+      const std::string path = Reader::join("solution", key);
+      const json& a = r.required(j, "solution", key);
+      if (!a.is_array()) r.badValue(path, a, "an array of numbers");
+      out.reserve(a.size());
+      for (size_t i = 0; i < a.size(); ++i) out.push_back(r.number(a[i], Reader::index(path, i)));
+    };
+    numbers("variables", sol.variables);
+    numbers("multipliers", sol.multipliers);
+    if (j.contains("rho")) sol.rho = r.nonNegative(j["rho"], "solution.rho");
+    if (j.contains("converged")) sol.converged = r.boolean(j["converged"], "solution.converged");
+    s.solution = std::move(sol);
+  }
   return s;
 }
 
@@ -703,6 +720,11 @@ std::string sceneToJson(const Scene& s) {
       fs.push_back({{"character", f.character}, {"expression", f.expression}, {"weight", f.weight}});
     root["objective"]["formulas"] = fs;
   }
+  if (s.solution)
+    root["solution"] = {{"variables", s.solution->variables},
+                        {"multipliers", s.solution->multipliers},
+                        {"rho", s.solution->rho},
+                        {"converged", s.solution->converged}};
   return root.dump(2) + "\n";
 }
 

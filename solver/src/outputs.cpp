@@ -1,6 +1,7 @@
 // JSON writers for the command-line outputs (see outputs.h).
 #include "solver/outputs.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -68,6 +69,30 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   val["flights"] = flights;
   j["validity"] = val;
   return j.dump(2) + "\n";
+}
+
+std::string motionCsv(const Animation& animation) {
+  std::string out = "time";
+  static const char* kinds[] = {"q", "qd", "qdd", "tau"};
+  for (const CharacterAnimation& c : animation.characters)
+    for (const std::string& dof : c.dofs)
+      for (const char* k : kinds) out += "," + c.name + "." + dof + "." + k;
+  out += "\n";
+  if (animation.characters.empty()) return out;
+  char buf[32];
+  const std::vector<double>& times = animation.characters.front().times;
+  for (size_t f = 0; f < times.size(); ++f) {
+    std::snprintf(buf, sizeof buf, "%.9g", times[f]);
+    out += buf;
+    for (const CharacterAnimation& c : animation.characters)
+      for (Eigen::Index d = 0; d < c.q.cols(); ++d)
+        for (const Eigen::MatrixXd* m : {&c.q, &c.qd, &c.qdd, &c.tau}) {
+          std::snprintf(buf, sizeof buf, ",%.12g", (*m)(static_cast<Eigen::Index>(f), d));
+          out += buf;
+        }
+    out += "\n";
+  }
+  return out;
 }
 
 std::string motionJson(const Animation& animation) {

@@ -126,6 +126,17 @@ struct SolverSpec {
   double tolerance = 1e-7;  // on scaled constraint rows (metres, radians, fraction of weight)
 };
 
+// A solved motion saved with the scene so reopening shows it: the solver's variables and
+// augmented-Lagrangian multipliers exactly as the transcription of this scene lays them out
+// (see solver/spacetime_problem.h). A solution whose size no longer fits the scene is ignored
+// by the solver and the editor, never an error.
+struct StoredSolution {
+  std::vector<double> variables;
+  std::vector<double> multipliers;
+  double rho = 0;
+  bool converged = false;
+};
+
 struct Scene {
   std::string name;
   double startTime = 0, endTime = 1;
@@ -137,6 +148,7 @@ struct Scene {
   std::vector<CharacterSpec> characters;
   std::vector<TermSpec> terms;
   ObjectiveSpec objective;
+  std::optional<StoredSolution> solution;
 
   const CharacterSpec* character(const std::string& id) const;
 };

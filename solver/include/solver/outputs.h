@@ -14,6 +14,10 @@ namespace spacetime {
 std::string summaryJson(const SolverSummary& summary, const ValidityReport& validity,
                         const SpacetimeProblem& problem);
 std::string motionJson(const Animation& animation);
+// The same motion as one CSV table for spreadsheets: a header row, then one row per frame with
+// the time and, per character and dof, `<character>.<dof>.q`, `.qd`, `.qdd`, `.tau`. Characters
+// must share the time grid (sampleAnimation guarantees it).
+std::string motionCsv(const Animation& animation);
 
 // Writes summary.json, motion.json and <character>.urdf into dir. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,

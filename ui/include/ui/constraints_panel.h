@@ -1,0 +1,48 @@
+// The constraints panel: every term of the scene - pins, keyframes, rests, contacts,
+// clearances, formula terms - and the joints' limits, with their properties. Add a term at
+// the current time (a pin at the selected body's origin, "key the current pose", a rest, a
+// contact, a clearance, a formula), enable or disable it, delete it. Every change is an undo
+// command.
+#pragma once
+
+#include <QTreeWidget>
+#include <QWidget>
+
+#include "ui/document.h"
+#include "ui/property_form.h"
+
+namespace spacetime::ui {
+
+class ConstraintsPanel : public QWidget {
+  Q_OBJECT
+ public:
+  explicit ConstraintsPanel(Document* doc, QWidget* parent = nullptr);
+
+  // The panel's commands. Each returns the new term's id (empty if nothing was added).
+  std::string addPin();         // the selected body's origin where it is at the current time
+  std::string keyCurrentPose(); // a keyframe of the selected character's pose now
+  std::string addRest();
+  std::string addContact();     // the selected body's origin on the ground around now
+  std::string addClearance();
+  std::string addFormula();
+  void removeSelected();
+  void setEnabled(const std::string& term, bool enabled);
+  QTreeWidget* list() const { return list_; }
+  PropertyForm* form() const { return form_; }
+
+ private:
+  void rebuildList();
+  void rebuildForm();
+  void termForm(const std::string& id);
+  std::string addTerm(const QString& text, TermSpec term);
+  // The selected character (index) and body, or the first ones.
+  bool selectedTarget(int* character, std::string* body) const;
+
+  Document* doc_;
+  QTreeWidget* list_;
+  PropertyForm* form_;
+  std::string formTerm_;
+  bool syncing_ = false;
+};
+
+}  // namespace spacetime::ui

@@ -1,0 +1,115 @@
+// The Document: the scene being edited, its undo stack, its file, the motion on show, the
+// current time and the selection. Every change to the scene is an undo command (EditScene, a
+// snapshot of the scene before and after, merged while the same drag or field goes on), so
+// undo/redo always restores an identical scene. A solver result is not an edit: it replaces the
+// motion and leaves the undo stack alone. Views observe the signals and never call each other.
+#pragma once
+
+#include <QObject>
+#include <QString>
+#include <QUndoCommand>
+#include <QUndoStack>
+#include <functional>
+#include <memory>
+
+#include "core/scene.h"
+#include "dynamics/model.h"
+#include "ui/solved_motion.h"
+
+namespace spacetime::ui {
+
+class Document : public QObject {
+  Q_OBJECT
+ public:
+  explicit Document(QObject* parent = nullptr);
+
+  const Scene& scene() const { return scene_; }
+  QUndoStack* undoStack() { return &undo_; }
+
+  // Applies `change` to a copy of the scene as one undo command named `text`. Consecutive edits
+  // with the same non-zero mergeId become one command (a drag, typing in a field). An edit
+  // that changes nothing adds no command.
+  void edit(const QString& text, const std::function<void(Scene&)>& change, int mergeId = 0);
+
+  // Replaces the whole document (New, Open, presets from a file): clears the undo stack. A
+  // stored solution that fits the scene becomes the motion on show.
+  void reset(const Scene& scene, const QString& filePath);
+  // Loads a scene file; false with the loader's message (file, field, what is wrong).
+  bool open(const QString& path, QString* error);
+  // Saves atomically, with the motion on show as the scene's stored solution.
+  bool saveAs(const QString& path, QString* error);
+  // The scene as it is saved: with the current motion's solution.
+  Scene sceneForSave() const;
+
+  QString filePath() const { return path_; }
+  bool isModified() const { return !undo_.isClean(); }
+
+  // Models of the scene's characters (empty when the scene cannot be built).
+  const std::vector<Model<double>>& models() const { return models_; }
+
+  // The motion on show: null when none fits the scene.
+  std::shared_ptr<const SolvedMotion> motion() const { return motion_; }
+  void setMotion(std::shared_ptr<const SolvedMotion> motion);
+
+  double currentTime() const { return time_; }
+  void setCurrentTime(double t);
+
+  // Selection: a body of a character, and/or a term.
+  int selectedCharacter() const { return selCharacter_; }
+  const std::string& selectedBody() const { return selBody_; }
+  const std::string& selectedTerm() const { return selTerm_; }
+  void selectBody(int character, const std::string& body);
+  void selectTerm(const std::string& term);
+
+  // Applied by EditScene only: sets the scene without touching the undo stack.
+  void applyScene(const Scene& scene);
+
+  // A unique id for a new term or body ("pin1", "pin2", ...).
+  std::string uniqueTermId(const std::string& stem) const;
+  std::string uniqueBodyId(const std::string& stem) const;
+
+ signals:
+  void sceneChanged();
+  void motionChanged();
+  void currentTimeChanged(double t);
+  void selectionChanged();
+  void filePathChanged(const QString& path);
+
+ private:
+  void rebuildModels();
+
+  Scene scene_;
+  QUndoStack undo_;
+  QString path_;
+  std::vector<Model<double>> models_;
+  std::shared_ptr<const SolvedMotion> motion_;
+  double time_ = 0;
+  int selCharacter_ = -1;
+  std::string selBody_, selTerm_;
+};
+
+// The one undo command of the document: the scene before and after an edit.
+class EditScene : public QUndoCommand {
+ public:
+  EditScene(Document* doc, const QString& text, Scene before, Scene after, int mergeId);
+  void undo() override;
+  void redo() override;
+  int id() const override { return mergeId_; }
+  bool mergeWith(const QUndoCommand* other) override;
+
+ private:
+  Document* doc_;
+  Scene before_, after_;
+  int mergeId_;
+};
+
+// Merge ids of continuous edits: a kind in the high bits, a field or handle index below.
+enum MergeKind : int {
+  kMergePinDrag = 1 << 20,
+  kMergeContactDrag = 2 << 20,
+  kMergeBodyField = 3 << 20,
+  kMergeTermField = 4 << 20,
+  kMergeSceneField = 5 << 20,
+};
+
+}  // namespace spacetime::ui

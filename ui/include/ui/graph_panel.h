@@ -1,0 +1,68 @@
+// The graph widget: plots any quantity of the motion over time - joint q, qd, qdd, tau; a body
+// origin's position and velocity; the centre of mass; contact forces; the physics residual
+// (the unactuated generalized forces as a fraction of the weight); and typed formulas - several
+// series at once, with a time cursor synced with the timeline, the values under the mouse, and
+// CSV export of what is plotted. Series follow the live iterates as the solver refines them.
+#pragma once
+
+#include <QChartView>
+#include <QLineEdit>
+#include <QTreeWidget>
+#include <QWidget>
+#include <set>
+
+#include "ui/document.h"
+
+namespace spacetime::ui {
+
+struct PlotSeries {
+  QString name;
+  std::vector<double> times, values;
+};
+
+// The values of one quantity over the motion. Keys: "q/<c>/<dof>", "qd/..", "qdd/..", "tau/..",
+// "pos/<c>/<body>/<axis>", "vel/<c>/<body>/<axis>", "com/<c>/<axis>", "force/<term>/<axis>",
+// "residual/<c>", "formula/<c>/<text>". False with a reason if the key does not apply.
+bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QString* error);
+
+class GraphView : public QChartView {
+  Q_OBJECT
+ public:
+  using QChartView::QChartView;
+  double cursorTime = 0;
+  const std::vector<PlotSeries>* series = nullptr;
+  QString hoverText;  // the values under the mouse, drawn in the corner
+
+ protected:
+  void drawForeground(QPainter* painter, const QRectF& rect) override;
+  void mouseMoveEvent(QMouseEvent* e) override;
+};
+
+class GraphPanel : public QWidget {
+  Q_OBJECT
+ public:
+  explicit GraphPanel(Document* doc, QWidget* parent = nullptr);
+
+  void setChecked(const QString& key, bool checked);
+  bool addFormula(const QString& formula, QString* error);  // for the selected character
+  const std::vector<PlotSeries>& plotted() const { return plotted_; }
+  QString plottedCsv() const;
+  bool exportCsv(const QString& path, QString* error) const;
+  QTreeWidget* quantities() const { return tree_; }
+
+ private:
+  void rebuildTree();
+  void replot();
+
+  Document* doc_;
+  QTreeWidget* tree_;
+  GraphView* view_;
+  QLineEdit* formula_;
+  std::set<QString> checked_;
+  std::vector<QString> formulas_;  // keys of user formulas
+  std::vector<PlotSeries> plotted_;
+  bool syncing_ = false;
+  bool defaultsChosen_ = false;
+};
+
+}  // namespace spacetime::ui

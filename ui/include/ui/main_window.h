@@ -1,0 +1,89 @@
+// The main window: the viewport in the middle, dockable builder, constraints, timeline and
+// graph panels (layout restored from QSettings), menus and toolbar for everything common with
+// shortcuts, and a status bar with the solver's progress. It owns the Document and the solver
+// job: Solve (F5) runs in the background and the iterates replace the motion as they arrive;
+// Stop (Esc) cancels; Auto-solve re-solves warm-started after every edit. File handling: New,
+// Open, recent files, Save/Save As (atomic, with the solution), a prompt before losing changes,
+// autosave with recovery after a crash, drag and drop of scene files; exports.
+#pragma once
+
+#include <QLabel>
+#include <QMainWindow>
+#include <QTimer>
+
+#include "ui/builder_panel.h"
+#include "ui/constraints_panel.h"
+#include "ui/document.h"
+#include "ui/graph_panel.h"
+#include "ui/solver_job.h"
+#include "ui/timeline.h"
+#include "ui/viewport.h"
+
+namespace spacetime::ui {
+
+class MainWindow : public QMainWindow {
+  Q_OBJECT
+ public:
+  explicit MainWindow(QWidget* parent = nullptr);
+  ~MainWindow() override;
+
+  Document* document() { return &doc_; }
+  SolverJob* solverJob() { return &job_; }
+  Viewport* viewport() { return viewport_; }
+  Timeline* timeline() { return timeline_; }
+  BuilderPanel* builder() { return builder_; }
+  ConstraintsPanel* constraints() { return constraints_; }
+  GraphPanel* graphs() { return graphs_; }
+  QString statusText() const;
+
+  bool openFile(const QString& path, QString* error);  // no prompt
+  bool saveFile(const QString& path, QString* error);
+  void solve();
+  void stopSolve();
+  void setAutoSolve(bool on);
+  bool autoSolve() const { return autoSolve_; }
+  bool solveOnOpen = true;  // solve a scene that has no stored solution as soon as it opens
+
+  // Exports (no dialogs).
+  bool exportMotionJson(const QString& path, QString* error);
+  bool exportMotionCsv(const QString& path, QString* error);
+  bool exportUrdf(const QString& directory, QString* error);
+  bool exportImageSequence(const QString& directory, QString* error);  // frame_0000.png ...
+
+  // Autosave: the file the current document autosaves to, writing it, and the recovery check.
+  QString autosavePath() const;
+  bool writeAutosave();
+  static QStringList pendingRecoveries();
+
+ protected:
+  void closeEvent(QCloseEvent* e) override;
+  void dragEnterEvent(QDragEnterEvent* e) override;
+  void dropEvent(QDropEvent* e) override;
+
+ private:
+  void createActions();
+  void updateTitle();
+  bool maybeSave();
+  void addRecent(const QString& path);
+  void rebuildRecentMenu();
+  void offerRecovery();
+
+  Document doc_;
+  SolverJob job_;
+  Viewport* viewport_;
+  Timeline* timeline_;
+  BuilderPanel* builder_;
+  ConstraintsPanel* constraints_;
+  GraphPanel* graphs_;
+  QLabel* progress_;
+  QMenu* recentMenu_ = nullptr;
+  QAction* solveAction_ = nullptr;
+  QAction* stopAction_ = nullptr;
+  QAction* autoSolveAction_ = nullptr;
+  bool autoSolve_ = false;
+  QTimer autosaveTimer_;
+  QTimer resolveTimer_;  // coalesces bursts of edits into one re-solve
+  QString autosaveId_;
+};
+
+}  // namespace spacetime::ui

@@ -1,0 +1,38 @@
+// The motion the editor shows: a solver iterate (or the final solution, or the initial guess)
+// sampled for display, with the state that warm-starts the next solve and is saved with the
+// scene. An immutable value handed from the solving thread to the interface (latest wins).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "solver/animation.h"
+#include "solver/spacetime_problem.h"
+
+namespace spacetime::ui {
+
+inline constexpr double kDisplayRateHz = 120;  // frames per second of the sampled motion
+
+struct SolvedMotion {
+  Animation animation;  // sampled at kDisplayRateHz
+  SolutionState state;  // the problem's variables and multipliers
+  double objective = 0;
+  double maxViolation = 0;
+  int iterations = 0;
+  bool solved = false;     // false: the initial guess, or an iterate still being refined
+  bool converged = false;  // the final solve met its tolerance
+  std::string reason;      // why the solve stopped (final motions)
+};
+
+// Samples the problem's current variables.
+std::shared_ptr<SolvedMotion> sampleMotion(const SpacetimeProblem& problem);
+
+// Joint positions (or velocities, order 1) of a character at time t, linear between frames,
+// clamped to the clip.
+Eigen::VectorXd poseAt(const CharacterAnimation& a, double t, int order = 0);
+
+// Whether the motion's characters have the scene's characters' dofs (after a structural edit
+// they do not, and the motion cannot be drawn).
+bool motionFitsScene(const SolvedMotion& motion, const Scene& scene);
+
+}  // namespace spacetime::ui

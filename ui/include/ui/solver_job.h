@@ -1,0 +1,61 @@
+// The solver as a background job: a snapshot of the scene (and a warm start) goes to a worker
+// thread; every iterate comes back to the interface thread as an immutable SolvedMotion (latest
+// wins: iterates the interface has not drawn yet are replaced, never queued); Stop sets an
+// atomic flag the solver checks every iteration. Starting a new solve while one runs cancels
+// the old one, whose late results are dropped - that is auto-solve while dragging.
+#pragma once
+
+#include <QObject>
+#include <QString>
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "core/scene.h"
+#include "solver/augmented_lagrangian.h"
+#include "ui/solved_motion.h"
+
+namespace spacetime::ui {
+
+class SolverJob : public QObject {
+  Q_OBJECT
+ public:
+  explicit SolverJob(QObject* parent = nullptr);
+  ~SolverJob() override;  // cancels and waits for the worker
+
+  // Solves `scene` from `warmStart` if it fits the problem (else from the default initial
+  // guess). The scene is validated as a file would be; an invalid one ends in failed().
+  void start(const Scene& scene, std::optional<SolutionState> warmStart = std::nullopt);
+  void cancel();
+  bool isRunning() const { return running_ > 0; }
+  // Blocks (processing events) until no solve runs; false on timeout.
+  bool waitForFinished(int timeoutMs);
+
+  int threads = 2;  // Ceres evaluation threads
+
+ signals:
+  void iterate(std::shared_ptr<const spacetime::ui::SolvedMotion> motion);
+  void finished(std::shared_ptr<const spacetime::ui::SolvedMotion> motion,
+                const spacetime::SolverSummary& summary);
+  void failed(const QString& reason);
+
+ private:
+  struct Run;
+  void post(const std::shared_ptr<Run>& run, std::shared_ptr<const SolvedMotion> motion);
+  void deliver(int generation);
+
+  std::shared_ptr<Run> current_;
+  std::atomic<int> running_{0};  // solves whose end the interface has not yet seen
+  std::atomic<int> alive_{0};    // worker threads still running code
+  int generation_ = 0;
+  std::mutex mutex_;  // guards the pending iterate below
+  std::shared_ptr<const SolvedMotion> pending_;
+  int pendingGeneration_ = -1;
+  bool deliveryQueued_ = false;
+};
+
+}  // namespace spacetime::ui
+
+Q_DECLARE_METATYPE(std::shared_ptr<const spacetime::ui::SolvedMotion>)
+Q_DECLARE_METATYPE(spacetime::SolverSummary)

@@ -1,0 +1,93 @@
+// The 3D viewport: draws the RenderScene (OpenGL 3.3 core, shaders from resources/shaders)
+// through an OrbitCamera, and turns mouse input into camera moves, selection and pin drags.
+//
+// Mouse (as Blender): middle drag orbits, Shift+middle pans, Ctrl+middle or the wheel zooms;
+// Alt+left orbits too, for laptops. Left click selects a body; left drag on a pin handle moves
+// the pin's target in the plane facing the camera (one merged undo command per drag). With the
+// pin tool on, a left click on a body adds a pin at the clicked point at the current time.
+#pragma once
+
+#include <QOpenGLBuffer>
+#include <QOpenGLFunctions_3_3_Core>
+#include <QOpenGLShaderProgram>
+#include <QOpenGLVertexArrayObject>
+#include <QOpenGLWidget>
+#include <array>
+#include <memory>
+
+#include "ui/camera.h"
+#include "ui/document.h"
+#include "ui/render_scene.h"
+
+namespace spacetime::ui {
+
+class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
+  Q_OBJECT
+ public:
+  explicit Viewport(Document* doc, QWidget* parent = nullptr);
+  ~Viewport() override;
+
+  OrbitCamera& camera() { return camera_; }
+  RenderOptions& options() { return options_; }
+  const RenderScene& renderScene();  // rebuilt if the document changed
+
+  void frameAll();
+  void setPinTool(bool on) { pinTool_ = on; }
+  bool pinTool() const { return pinTool_; }
+  // Draws one frame into the current framebuffer and waits for the GPU (for the benchmark).
+  double renderFrameAndFinish();
+  double lastFrameMilliseconds() const { return lastFrameMs_; }
+
+  // The pixel position of a world point (for tests driving the mouse).
+  QPointF toPixel(const glm::vec3& p) const;
+
+ public slots:
+  void invalidate();  // the document changed: rebuild the RenderScene and repaint
+
+ signals:
+  void pinToolUsed();
+
+ protected:
+  void initializeGL() override;
+  void resizeGL(int w, int h) override;
+  void paintGL() override;
+  void mousePressEvent(QMouseEvent* e) override;
+  void mouseMoveEvent(QMouseEvent* e) override;
+  void mouseReleaseEvent(QMouseEvent* e) override;
+  void wheelEvent(QWheelEvent* e) override;
+
+ private:
+  struct GpuMesh {
+    QOpenGLVertexArrayObject vao;
+    QOpenGLBuffer vbo{QOpenGLBuffer::VertexBuffer};
+    int count = 0;
+  };
+  void uploadMesh(Mesh mesh, const std::vector<float>& vertices);
+  void drawSolid(const Solid& s, const glm::mat4& viewProjection);
+  void drawLines(const std::vector<float>& vertices, GLenum mode, const glm::mat4& viewProjection);
+  void clickAt(const QPointF& pos);
+  int handleAt(const QPointF& pos);
+
+  Document* doc_;
+  OrbitCamera camera_;
+  RenderOptions options_;
+  RenderScene scene_;
+  bool dirty_ = true;
+  bool pinTool_ = false;
+  bool framedOnce_ = false;
+
+  std::unique_ptr<QOpenGLShaderProgram> solidShader_, lineShader_;
+  std::array<std::unique_ptr<GpuMesh>, 4> meshes_;
+  QOpenGLVertexArrayObject lineVao_;
+  QOpenGLBuffer lineVbo_{QOpenGLBuffer::VertexBuffer};
+  double lastFrameMs_ = 0;
+
+  // Mouse state.
+  enum class Drag { None, Orbit, Pan, Zoom, Handle, Click } drag_ = Drag::None;
+  QPointF last_, pressPos_;
+  std::string dragTerm_;
+  int dragSerial_ = 0;
+  glm::vec3 dragPlanePoint_{0.0f}, dragPlaneNormal_{0.0f, 0.0f, 1.0f};
+};
+
+}  // namespace spacetime::ui

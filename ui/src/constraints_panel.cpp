@@ -1,0 +1,385 @@
+#include "ui/constraints_panel.h"
+
+#include <QHeaderView>
+#include <QMenu>
+#include <QScrollArea>
+#include <QSplitter>
+#include <QToolButton>
+#include <QVBoxLayout>
+
+#include "ui/render_scene.h"
+
+namespace spacetime::ui {
+
+namespace {
+
+TermSpec* findTerm(Scene& s, const std::string& id) {
+  for (TermSpec& t : s.terms)
+    if (t.id == id) return &t;
+  return nullptr;
+}
+const TermSpec* findTerm(const Scene& s, const std::string& id) { return findTerm(const_cast<Scene&>(s), id); }
+
+QString when(const TermSpec& t) {
+  auto n = [](double v) { return QString::number(v, 'g', 4); };
+  switch (t.kind) {
+    case TermKind::Pin: return t.until ? n(t.time) + "–" + n(*t.until) + " s" : n(t.time) + " s";
+    case TermKind::Keyframe:
+    case TermKind::Rest: return n(t.time) + " s";
+    case TermKind::Contact:
+    case TermKind::Clearance: return n(t.start) + "–" + n(t.end) + " s";
+    case TermKind::Formula: return t.interval ? n(t.start) + "–" + n(t.end) + " s" : n(t.time) + " s";
+  }
+  return {};
+}
+
+}  // namespace
+
+ConstraintsPanel::ConstraintsPanel(Document* doc, QWidget* parent) : QWidget(parent), doc_(doc) {
+  setObjectName("constraintsPanel");
+  auto* layout = new QVBoxLayout(this);
+  layout->setContentsMargins(2, 2, 2, 2);
+  auto* buttons = new QHBoxLayout;
+  auto* add = new QToolButton;
+  add->setText(tr("Add"));
+  add->setPopupMode(QToolButton::InstantPopup);
+  auto* menu = new QMenu(add);
+  menu->addAction(tr("Pin the selected body here"), this, [this] { addPin(); });
+  menu->addAction(tr("Key the current pose"), this, [this] { keyCurrentPose(); }, QKeySequence(Qt::Key_K));
+  menu->addAction(tr("Rest"), this, [this] { addRest(); });
+  menu->addAction(tr("Contact"), this, [this] { addContact(); });
+  menu->addAction(tr("Clearance"), this, [this] { addClearance(); });
+  menu->addAction(tr("Formula"), this, [this] { addFormula(); });
+  add->setMenu(menu);
+  buttons->addWidget(add);
+  auto* remove = new QToolButton;
+  remove->setText(tr("Delete"));
+  connect(remove, &QToolButton::clicked, this, [this] { removeSelected(); });
+  buttons->addWidget(remove);
+  buttons->addStretch();
+  layout->addLayout(buttons);
+
+  list_ = new QTreeWidget;
+  list_->setRootIsDecorated(false);
+  list_->setHeaderLabels({tr("Term"), tr("Kind"), tr("When")});
+  list_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  form_ = new PropertyForm(doc_, kMergeTermField);
+  auto* scroll = new QScrollArea;
+  scroll->setWidget(form_);
+  scroll->setWidgetResizable(true);
+  auto* split = new QSplitter(Qt::Vertical);
+  split->addWidget(list_);
+  split->addWidget(scroll);
+  split->setSizes({260, 360});
+  layout->addWidget(split, 1);
+
+  connect(list_, &QTreeWidget::currentItemChanged, this, [this](QTreeWidgetItem* item) {
+    if (syncing_ || !item) return;
+    const QString kind = item->data(0, Qt::UserRole + 1).toString();
+    if (kind == "limit") {
+      doc_->selectBody(item->data(0, Qt::UserRole + 2).toInt(), item->data(0, Qt::UserRole).toString().toStdString());
+      doc_->selectTerm({});
+    } else {
+      doc_->selectTerm(item->data(0, Qt::UserRole).toString().toStdString());
+    }
+  });
+  connect(list_, &QTreeWidget::itemChanged, this, [this](QTreeWidgetItem* item, int column) {
+    if (syncing_ || column != 0 || item->data(0, Qt::UserRole + 1).toString() == "limit") return;
+    setEnabled(item->data(0, Qt::UserRole).toString().toStdString(), item->checkState(0) == Qt::Checked);
+  });
+  connect(doc_, &Document::sceneChanged, this, [this] { rebuildList(); rebuildForm(); });
+  connect(doc_, &Document::selectionChanged, this, [this] { rebuildList(); rebuildForm(); });
+  rebuildList();
+  rebuildForm();
+}
+
+void ConstraintsPanel::rebuildList() {
+  syncing_ = true;
+  list_->clear();
+  const Scene& s = doc_->scene();
+  for (const TermSpec& t : s.terms) {
+    auto* item = new QTreeWidgetItem(list_, {QString::fromStdString(t.id), QString::fromStdString(toString(t.kind)), when(t)});
+    item->setFlags(item->flags() | Qt::ItemIsUserCheckable);
+    item->setCheckState(0, t.enabled ? Qt::Checked : Qt::Unchecked);
+    item->setData(0, Qt::UserRole, QString::fromStdString(t.id));
+    item->setData(0, Qt::UserRole + 1, QString::fromStdString(toString(t.kind)));
+    if (t.id == doc_->selectedTerm()) list_->setCurrentItem(item);
+  }
+  // Joint and torque limits live on the joints (edited in the builder); listed here too.
+  for (size_t c = 0; c < s.characters.size(); ++c)
+    for (const BodySpec& b : s.characters[c].bodies) {
+      if (b.parent.empty() || (!b.joint.limits && !b.joint.torqueLimit)) continue;
+      QString range;
+      if (b.joint.limits) range = QString("[%1, %2]").arg(b.joint.limits->first).arg(b.joint.limits->second);
+      if (b.joint.torqueLimit) range += QString(" |τ|≤%1").arg(*b.joint.torqueLimit);
+      auto* item = new QTreeWidgetItem(list_, {QString::fromStdString(b.joint.id), tr("limit"), range});
+      item->setData(0, Qt::UserRole, QString::fromStdString(b.id));
+      item->setData(0, Qt::UserRole + 1, QString("limit"));
+      item->setData(0, Qt::UserRole + 2, static_cast<int>(c));
+    }
+  syncing_ = false;
+}
+
+void ConstraintsPanel::rebuildForm() {
+  const std::string id = doc_->selectedTerm();
+  const bool exists = findTerm(doc_->scene(), id) != nullptr;
+  if (exists && id == formTerm_) {
+    form_->refresh();
+    return;
+  }
+  form_->clear();
+  formTerm_ = exists ? id : std::string();
+  if (!exists) return;
+  termForm(id);
+  form_->refresh();
+}
+
+void ConstraintsPanel::termForm(const std::string& id) {
+  const TermSpec& term = *findTerm(doc_->scene(), id);
+  auto get = [id](const Scene& s) -> const TermSpec& {
+    static const TermSpec none;
+    const TermSpec* t = findTerm(s, id);
+    return t ? *t : none;
+  };
+  auto edit = [id](Scene& s, const std::function<void(TermSpec&)>& f) {
+    if (TermSpec* t = findTerm(s, id)) f(*t);
+  };
+  auto timeRow = [&](const QString& label, double TermSpec::*field) {
+    form_->addDouble(label, [get, field](const Scene& s) { return get(s).*field; },
+                     [edit, field](Scene& s, double v) { edit(s, [&](TermSpec& t) { t.*field = v; }); },
+                     -1e3, 1e3, 0.01, 3, " s");
+  };
+  const Scene& scene = doc_->scene();
+  const CharacterSpec* ch = scene.character(term.character);
+  QStringList bodies;
+  if (ch)
+    for (const BodySpec& b : ch->bodies) bodies << QString::fromStdString(b.id);
+  auto bodyRow = [&](bool optional) {
+    QStringList choices = bodies;
+    if (optional) choices.prepend(tr("(whole character)"));
+    form_->addChoice(tr("Body"), choices,
+                     [get, choices](const Scene& s) {
+                       const int i = static_cast<int>(choices.indexOf(QString::fromStdString(get(s).body)));
+                       return i < 0 ? 0 : i;
+                     },
+                     [edit, choices, optional](Scene& s, int v) {
+                       edit(s, [&](TermSpec& t) { t.body = optional && v == 0 ? std::string() : choices[v].toStdString(); });
+                     });
+  };
+  auto vectorRow = [&](const QString& label, Eigen::Vector3d TermSpec::*field) {
+    form_->addVector(label, [get, field](const Scene& s) { return get(s).*field; },
+                     [edit, field](Scene& s, const Eigen::Vector3d& v) { edit(s, [&](TermSpec& t) { t.*field = v; }); },
+                     -100, 100, 0.01, 3);
+  };
+  form_->addText(tr("Id"), [get](const Scene& s) { return get(s).id; },
+                 [this, id](Scene& s, const std::string& v) {
+                   if (v.empty() || findTerm(s, v)) return;
+                   findTerm(s, id)->id = v;
+                   QMetaObject::invokeMethod(this, [this, v] { doc_->selectTerm(v); }, Qt::QueuedConnection);
+                 });
+  form_->addBool(tr("Enabled"), [get](const Scene& s) { return get(s).enabled; },
+                 [edit](Scene& s, bool v) { edit(s, [&](TermSpec& t) { t.enabled = v; }); });
+  switch (term.kind) {
+    case TermKind::Pin:
+      bodyRow(false);
+      timeRow(tr("Time"), &TermSpec::time);
+      form_->addDouble(tr("Hold until"), [get](const Scene& s) { return get(s).until.value_or(get(s).time); },
+                       [edit](Scene& s, double v) {
+                         edit(s, [&](TermSpec& t) {
+                           if (v > t.time) t.until = v;
+                           else t.until.reset();
+                         });
+                       }, -1e3, 1e3, 0.01, 3, " s");
+      vectorRow(tr("Body point"), &TermSpec::point);
+      vectorRow(tr("Target"), &TermSpec::position);
+      for (int a = 0; a < 3; ++a)
+        form_->addBool(tr("Hold %1").arg(QChar("xyz"[a])), [get, a](const Scene& s) { return get(s).axes[a]; },
+                       [edit, a](Scene& s, bool v) { edit(s, [&](TermSpec& t) { t.axes[a] = v; }); });
+      break;
+    case TermKind::Keyframe:
+      timeRow(tr("Time"), &TermSpec::time);
+      for (size_t k = 0; k < term.values.size(); ++k)
+        form_->addDouble(QString::fromStdString(term.values[k].first),
+                         [get, k](const Scene& s) { return k < get(s).values.size() ? get(s).values[k].second : 0.0; },
+                         [edit, k](Scene& s, double v) {
+                           edit(s, [&](TermSpec& t) { if (k < t.values.size()) t.values[k].second = v; });
+                         }, -1e3, 1e3, 0.01, 4);
+      break;
+    case TermKind::Rest:
+      bodyRow(true);
+      timeRow(tr("Time"), &TermSpec::time);
+      break;
+    case TermKind::Contact:
+      bodyRow(false);
+      timeRow(tr("Start"), &TermSpec::start);
+      timeRow(tr("End"), &TermSpec::end);
+      form_->addDouble(tr("Friction μ"), [get](const Scene& s) { return get(s).friction; },
+                       [edit](Scene& s, double v) { edit(s, [&](TermSpec& t) { t.friction = v; }); }, 0, 10, 0.05, 2);
+      for (size_t k = 0; k < term.points.size(); ++k)
+        form_->addVector(tr("Point %1").arg(k + 1),
+                         [get, k](const Scene& s) { return k < get(s).points.size() ? get(s).points[k] : Eigen::Vector3d::Zero().eval(); },
+                         [edit, k](Scene& s, const Eigen::Vector3d& v) {
+                           edit(s, [&](TermSpec& t) { if (k < t.points.size()) t.points[k] = v; });
+                         }, -100, 100, 0.01, 3);
+      break;
+    case TermKind::Clearance:
+      bodyRow(false);
+      vectorRow(tr("Body point"), &TermSpec::point);
+      timeRow(tr("Start"), &TermSpec::start);
+      timeRow(tr("End"), &TermSpec::end);
+      form_->addChoice(tr("Stay"), {tr("above a height"), tr("outside a box")},
+                       [get](const Scene& s) { return get(s).box ? 1 : 0; },
+                       [edit](Scene& s, int v) { edit(s, [&](TermSpec& t) { t.box = v == 1; }); });
+      form_->addDouble(tr("Height"), [get](const Scene& s) { return get(s).height; },
+                       [edit](Scene& s, double v) { edit(s, [&](TermSpec& t) { t.height = v; }); }, -100, 100, 0.01, 3, " m");
+      vectorRow(tr("Box min"), &TermSpec::boxMin);
+      vectorRow(tr("Box max"), &TermSpec::boxMax);
+      break;
+    case TermKind::Formula:
+      form_->addText(tr("Formula"), [get](const Scene& s) { return get(s).expression; },
+                     [edit](Scene& s, const std::string& v) { edit(s, [&](TermSpec& t) { t.expression = v; }); });
+      form_->addChoice(tr("Relation"), {"=", "<=", ">="},
+                       [get](const Scene& s) { return get(s).relation == '=' ? 0 : get(s).relation == '<' ? 1 : 2; },
+                       [edit](Scene& s, int v) { edit(s, [&](TermSpec& t) { t.relation = "=<>"[v]; }); });
+      form_->addDouble(tr("Value"), [get](const Scene& s) { return get(s).value; },
+                       [edit](Scene& s, double v) { edit(s, [&](TermSpec& t) { t.value = v; }); }, -1e6, 1e6, 0.01, 4);
+      form_->addBool(tr("Over an interval"), [get](const Scene& s) { return get(s).interval; },
+                     [edit](Scene& s, bool v) {
+                       edit(s, [&](TermSpec& t) {
+                         t.interval = v;
+                         if (v && !(t.end > t.start)) { t.start = t.time; t.end = t.time + 0.1; }
+                       });
+                     });
+      timeRow(tr("Time"), &TermSpec::time);
+      timeRow(tr("Start"), &TermSpec::start);
+      timeRow(tr("End"), &TermSpec::end);
+      break;
+  }
+}
+
+bool ConstraintsPanel::selectedTarget(int* character, std::string* body) const {
+  const Scene& s = doc_->scene();
+  if (s.characters.empty()) return false;
+  *character = doc_->selectedCharacter();
+  if (*character < 0 || *character >= static_cast<int>(s.characters.size())) *character = 0;
+  *body = doc_->selectedBody();
+  if (body->empty() || !s.characters[*character].body(*body)) *body = s.characters[*character].bodies.front().id;
+  return true;
+}
+
+std::string ConstraintsPanel::addTerm(const QString& text, TermSpec term) {
+  doc_->edit(text, [&](Scene& s) { s.terms.push_back(term); });
+  doc_->selectTerm(term.id);
+  return term.id;
+}
+
+std::string ConstraintsPanel::addPin() {
+  int c;
+  std::string body;
+  if (!selectedTarget(&c, &body) || doc_->models().size() <= static_cast<size_t>(c)) return {};
+  const Model<double>& model = doc_->models()[c];
+  const double t = doc_->currentTime();
+  const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), t)[c];
+  TermSpec pin;
+  pin.id = doc_->uniqueTermId("pin");
+  pin.kind = TermKind::Pin;
+  pin.character = doc_->scene().characters[c].id;
+  pin.body = body;
+  pin.time = t;
+  pin.position = bodyToWorld(model, q, model.bodyIndex(body), pin.point);
+  if (doc_->scene().characters[c].root == RootKind::Planar) pin.axes = {true, true, false};
+  return addTerm(tr("Add pin"), pin);
+}
+
+std::string ConstraintsPanel::keyCurrentPose() {
+  int c;
+  std::string body;
+  if (!selectedTarget(&c, &body) || doc_->models().size() <= static_cast<size_t>(c)) return {};
+  const double t = doc_->currentTime();
+  const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), t)[c];
+  TermSpec key;
+  key.id = doc_->uniqueTermId("key");
+  key.kind = TermKind::Keyframe;
+  key.character = doc_->scene().characters[c].id;
+  key.time = t;
+  const std::vector<std::string> dofs = doc_->scene().characters[c].dofNames();
+  for (size_t d = 0; d < dofs.size(); ++d) key.values.emplace_back(dofs[d], q[static_cast<Eigen::Index>(d)]);
+  return addTerm(tr("Key the current pose"), key);
+}
+
+std::string ConstraintsPanel::addRest() {
+  int c;
+  std::string body;
+  if (!selectedTarget(&c, &body)) return {};
+  TermSpec rest;
+  rest.id = doc_->uniqueTermId("rest");
+  rest.kind = TermKind::Rest;
+  rest.character = doc_->scene().characters[c].id;
+  rest.time = doc_->currentTime();
+  return addTerm(tr("Add rest"), rest);
+}
+
+std::string ConstraintsPanel::addContact() {
+  int c;
+  std::string body;
+  if (!selectedTarget(&c, &body)) return {};
+  const Scene& s = doc_->scene();
+  TermSpec contact;
+  contact.id = doc_->uniqueTermId("contact");
+  contact.kind = TermKind::Contact;
+  contact.character = s.characters[c].id;
+  contact.body = body;
+  contact.points = {Eigen::Vector3d::Zero()};
+  const double span = 0.2 * (s.endTime - s.startTime);
+  contact.start = std::max(s.startTime, doc_->currentTime() - span / 2);
+  contact.end = std::min(s.endTime, contact.start + span);
+  return addTerm(tr("Add contact"), contact);
+}
+
+std::string ConstraintsPanel::addClearance() {
+  int c;
+  std::string body;
+  if (!selectedTarget(&c, &body)) return {};
+  const Scene& s = doc_->scene();
+  TermSpec clearance;
+  clearance.id = doc_->uniqueTermId("clearance");
+  clearance.kind = TermKind::Clearance;
+  clearance.character = s.characters[c].id;
+  clearance.body = body;
+  clearance.start = s.startTime;
+  clearance.end = s.endTime;
+  clearance.height = s.groundHeight;
+  return addTerm(tr("Add clearance"), clearance);
+}
+
+std::string ConstraintsPanel::addFormula() {
+  int c;
+  std::string body;
+  if (!selectedTarget(&c, &body)) return {};
+  TermSpec f;
+  f.id = doc_->uniqueTermId("formula");
+  f.kind = TermKind::Formula;
+  f.character = doc_->scene().characters[c].id;
+  f.expression = "pos(" + body + ").y";
+  f.relation = '>';
+  f.value = doc_->scene().groundHeight;
+  f.time = doc_->currentTime();
+  return addTerm(tr("Add formula"), f);
+}
+
+void ConstraintsPanel::removeSelected() {
+  const std::string id = doc_->selectedTerm();
+  if (!findTerm(doc_->scene(), id)) return;
+  doc_->edit(tr("Delete %1").arg(QString::fromStdString(id)),
+             [&](Scene& s) { std::erase_if(s.terms, [&](const TermSpec& t) { return t.id == id; }); });
+  doc_->selectTerm({});
+}
+
+void ConstraintsPanel::setEnabled(const std::string& id, bool enabled) {
+  doc_->edit(enabled ? tr("Enable %1").arg(QString::fromStdString(id)) : tr("Disable %1").arg(QString::fromStdString(id)),
+             [&](Scene& s) {
+               if (TermSpec* t = findTerm(s, id)) t->enabled = enabled;
+             });
+}
+
+}  // namespace spacetime::ui

@@ -1,0 +1,176 @@
+#include "ui/document.h"
+
+#include <QFile>
+#include <algorithm>
+
+#include "core/scene_io.h"
+#include "dynamics/build_model.h"
+
+namespace spacetime::ui {
+
+namespace {
+// Undo keeps whole scenes: compare them by their canonical text.
+bool sameScene(const Scene& a, const Scene& b) { return sceneToJson(a) == sceneToJson(b); }
+}  // namespace
+
+Document::Document(QObject* parent) : QObject(parent) {
+  scene_.name = "untitled";
+  rebuildModels();
+}
+
+void Document::edit(const QString& text, const std::function<void(Scene&)>& change, int mergeId) {
+  Scene after = scene_;
+  change(after);
+  after.solution.reset();
+  if (sameScene(after, scene_)) return;
+  undo_.push(new EditScene(this, text, scene_, std::move(after), mergeId));
+}
+
+void Document::applyScene(const Scene& scene) {
+  scene_ = scene;
+  rebuildModels();
+  if (motion_ && !motionFitsScene(*motion_, scene_)) {
+    motion_.reset();
+    emit motionChanged();
+  }
+  emit sceneChanged();
+}
+
+void Document::reset(const Scene& scene, const QString& filePath) {
+  undo_.clear();
+  scene_ = scene;
+  std::optional<StoredSolution> stored = std::move(scene_.solution);
+  scene_.solution.reset();
+  rebuildModels();
+  motion_.reset();
+  if (stored) {
+    std::string error;
+    if (auto problem = SpacetimeProblem::build(scene_, &error);
+        problem && problem->restore({stored->variables, stored->multipliers, stored->rho})) {
+      auto m = sampleMotion(*problem);
+      m->solved = true;
+      m->converged = stored->converged;
+      m->reason = "loaded with the scene";
+      motion_ = m;
+    }
+  }
+  path_ = filePath;
+  time_ = scene_.startTime;
+  selCharacter_ = scene_.characters.empty() ? -1 : 0;
+  selBody_.clear();
+  selTerm_.clear();
+  undo_.setClean();
+  emit filePathChanged(path_);
+  emit sceneChanged();
+  emit motionChanged();
+  emit currentTimeChanged(time_);
+  emit selectionChanged();
+}
+
+bool Document::open(const QString& path, QString* error) {
+  QFile f(path);
+  if (!f.open(QIODevice::ReadOnly)) {
+    *error = path + ": cannot be read: " + f.errorString();
+    return false;
+  }
+  const SceneLoadResult r = parseScene(f.readAll().toStdString(), path.toStdString());
+  if (!r.scene) {
+    *error = QString::fromStdString(r.error);
+    return false;
+  }
+  reset(*r.scene, path.startsWith(":/") ? QString() : path);
+  return true;
+}
+
+Scene Document::sceneForSave() const {
+  Scene s = scene_;
+  if (motion_ && motion_->solved)
+    s.solution = StoredSolution{motion_->state.variables, motion_->state.multipliers,
+                                motion_->state.rho, motion_->converged};
+  return s;
+}
+
+bool Document::saveAs(const QString& path, QString* error) {
+  std::string why;
+  if (!saveSceneFile(sceneForSave(), path.toStdString(), &why)) {
+    *error = QString::fromStdString(why);
+    return false;
+  }
+  undo_.setClean();
+  if (path != path_) {
+    path_ = path;
+    emit filePathChanged(path_);
+  }
+  return true;
+}
+
+void Document::setMotion(std::shared_ptr<const SolvedMotion> motion) {
+  if (motion && !motionFitsScene(*motion, scene_)) return;  // a result of an older structure
+  motion_ = std::move(motion);
+  emit motionChanged();
+}
+
+void Document::setCurrentTime(double t) {
+  t = std::clamp(t, scene_.startTime, scene_.endTime);
+  if (t == time_) return;
+  time_ = t;
+  emit currentTimeChanged(t);
+}
+
+void Document::selectBody(int character, const std::string& body) {
+  if (character == selCharacter_ && body == selBody_) return;
+  selCharacter_ = character;
+  selBody_ = body;
+  emit selectionChanged();
+}
+
+void Document::selectTerm(const std::string& term) {
+  if (term == selTerm_) return;
+  selTerm_ = term;
+  emit selectionChanged();
+}
+
+std::string Document::uniqueTermId(const std::string& stem) const {
+  for (int i = 1;; ++i) {
+    const std::string id = stem + std::to_string(i);
+    if (std::none_of(scene_.terms.begin(), scene_.terms.end(),
+                     [&](const TermSpec& t) { return t.id == id; }))
+      return id;
+  }
+}
+
+std::string Document::uniqueBodyId(const std::string& stem) const {
+  for (int i = 1;; ++i) {
+    const std::string id = stem + std::to_string(i);
+    bool used = false;
+    for (const CharacterSpec& c : scene_.characters)
+      used = used || c.body(id) != nullptr || c.id == id;
+    if (!used) return id;
+  }
+}
+
+void Document::rebuildModels() {
+  models_.clear();
+  for (const CharacterSpec& c : scene_.characters) {
+    if (c.bodies.empty()) {
+      models_.clear();
+      return;
+    }
+    models_.push_back(buildModel(c, scene_.gravity));
+  }
+}
+
+EditScene::EditScene(Document* doc, const QString& text, Scene before, Scene after, int mergeId)
+    : QUndoCommand(text), doc_(doc), before_(std::move(before)), after_(std::move(after)),
+      mergeId_(mergeId == 0 ? -1 : mergeId) {}
+
+void EditScene::undo() { doc_->applyScene(before_); }
+void EditScene::redo() { doc_->applyScene(after_); }
+
+bool EditScene::mergeWith(const QUndoCommand* other) {
+  if (other->id() != id()) return false;
+  after_ = static_cast<const EditScene*>(other)->after_;
+  return true;
+}
+
+}  // namespace spacetime::ui

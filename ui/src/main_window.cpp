@@ -1,0 +1,418 @@
+#include "ui/main_window.h"
+
+#include <QAction>
+#include <QApplication>
+#include <QCloseEvent>
+#include <QDir>
+#include <QDockWidget>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QMimeData>
+#include <QSettings>
+#include <QStandardPaths>
+#include <QStatusBar>
+#include <QToolBar>
+#include <QUuid>
+
+#include "core/atomic_file.h"
+#include "core/scene_io.h"
+#include "dynamics/build_model.h"
+#include "dynamics/urdf_export.h"
+#include "solver/outputs.h"
+
+namespace spacetime::ui {
+
+namespace {
+QString autosaveDirectory() {
+  return QStandardPaths::writableLocation(QStandardPaths::AppLocalDataLocation) + "/autosave";
+}
+}  // namespace
+
+MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
+  setObjectName("mainWindow");
+  setAcceptDrops(true);
+  autosaveId_ = QUuid::createUuid().toString(QUuid::WithoutBraces);
+
+  viewport_ = new Viewport(&doc_);
+  setCentralWidget(viewport_);
+  auto dock = [this](const QString& title, const char* name, QWidget* w, Qt::DockWidgetArea area) {
+    auto* d = new QDockWidget(title, this);
+    d->setObjectName(name);
+    d->setWidget(w);
+    addDockWidget(area, d);
+    return d;
+  };
+  builder_ = new BuilderPanel(&doc_);
+  constraints_ = new ConstraintsPanel(&doc_);
+  timeline_ = new Timeline(&doc_);
+  graphs_ = new GraphPanel(&doc_);
+  QDockWidget* builderDock = dock(tr("Builder"), "builderDock", builder_, Qt::LeftDockWidgetArea);
+  QDockWidget* constraintsDock = dock(tr("Constraints"), "constraintsDock", constraints_, Qt::RightDockWidgetArea);
+  QDockWidget* timelineDock = dock(tr("Timeline"), "timelineDock", timeline_, Qt::BottomDockWidgetArea);
+  QDockWidget* graphDock = dock(tr("Graphs"), "graphDock", graphs_, Qt::BottomDockWidgetArea);
+  splitDockWidget(timelineDock, graphDock, Qt::Vertical);
+  resizeDocks({builderDock, constraintsDock}, {300, 300}, Qt::Horizontal);
+  resizeDocks({timelineDock, graphDock}, {100, 330}, Qt::Vertical);
+
+  progress_ = new QLabel(tr("Ready"));
+  statusBar()->addPermanentWidget(progress_, 1);
+
+  createActions();
+  for (QDockWidget* d : {builderDock, constraintsDock, timelineDock, graphDock})
+    findChild<QMenu*>("viewMenu")->addAction(d->toggleViewAction());
+
+  connect(&job_, &SolverJob::iterate, this, [this](std::shared_ptr<const SolvedMotion> m) {
+    doc_.setMotion(m);
+    progress_->setText(tr("Solving… iteration %1 · objective %2 · violation %3")
+                           .arg(m->iterations).arg(m->objective, 0, 'g', 6).arg(m->maxViolation, 0, 'g', 3));
+  });
+  connect(&job_, &SolverJob::finished, this, [this](std::shared_ptr<const SolvedMotion> m, const SolverSummary& s) {
+    doc_.setMotion(m);
+    progress_->setText(tr("%1 after %2 iterations (%3 s) · objective %4 · violation %5 · %6")
+                           .arg(s.converged ? tr("Converged") : tr("Stopped"))
+                           .arg(s.iterations).arg(s.solveSeconds, 0, 'f', 2)
+                           .arg(s.objective, 0, 'g', 6).arg(s.maxViolation, 0, 'g', 3)
+                           .arg(QString::fromStdString(s.reason)));
+    solveAction_->setEnabled(true);
+    stopAction_->setEnabled(false);
+  });
+  connect(&job_, &SolverJob::failed, this, [this](const QString& why) {
+    progress_->setText(tr("Cannot solve: %1").arg(why));
+    solveAction_->setEnabled(true);
+    stopAction_->setEnabled(false);
+  });
+  resolveTimer_.setSingleShot(true);
+  resolveTimer_.setInterval(0);
+  connect(&resolveTimer_, &QTimer::timeout, this, &MainWindow::solve);
+  connect(doc_.undoStack(), &QUndoStack::indexChanged, this, [this] {
+    if (autoSolve_) resolveTimer_.start();
+  });
+  connect(doc_.undoStack(), &QUndoStack::cleanChanged, this, &MainWindow::updateTitle);
+  connect(&doc_, &Document::filePathChanged, this, &MainWindow::updateTitle);
+  autosaveTimer_.setInterval(30000);
+  connect(&autosaveTimer_, &QTimer::timeout, this, &MainWindow::writeAutosave);
+  autosaveTimer_.start();
+
+  QSettings settings;
+  restoreGeometry(settings.value("window/geometry").toByteArray());
+  restoreState(settings.value("window/state").toByteArray());
+  resize(settings.contains("window/geometry") ? size() : QSize(1500, 950));
+  updateTitle();
+  QTimer::singleShot(0, this, &MainWindow::offerRecovery);
+}
+
+MainWindow::~MainWindow() { job_.cancel(); }
+
+void MainWindow::createActions() {
+  auto action = [this](QMenu* menu, const QString& text, const QKeySequence& key, auto slot) {
+    QAction* a = menu->addAction(text);
+    a->setShortcut(key);
+    connect(a, &QAction::triggered, this, slot);
+    addAction(a);
+    return a;
+  };
+  QMenu* file = menuBar()->addMenu(tr("&File"));
+  action(file, tr("&New"), QKeySequence::New, [this] {
+    if (!maybeSave()) return;
+    Scene s;
+    s.name = "untitled";
+    doc_.reset(s, {});
+  });
+  action(file, tr("&Open…"), QKeySequence::Open, [this] {
+    if (!maybeSave()) return;
+    const QString path = QFileDialog::getOpenFileName(this, tr("Open scene"), {}, tr("Spacetime scenes (*.json)"));
+    QString error;
+    if (!path.isEmpty() && !openFile(path, &error)) QMessageBox::warning(this, tr("Open"), error);
+  });
+  recentMenu_ = file->addMenu(tr("Open &Recent"));
+  rebuildRecentMenu();
+  auto saveAs = [this] {
+    const QString path = QFileDialog::getSaveFileName(this, tr("Save scene"), doc_.filePath().isEmpty() ? "scene.json" : doc_.filePath(), tr("Spacetime scenes (*.json)"));
+    QString error;
+    if (!path.isEmpty() && !saveFile(path, &error)) QMessageBox::warning(this, tr("Save"), error);
+  };
+  action(file, tr("&Save"), QKeySequence::Save, [this, saveAs] {
+    if (doc_.filePath().isEmpty()) return saveAs();
+    QString error;
+    if (!saveFile(doc_.filePath(), &error)) QMessageBox::warning(this, tr("Save"), error);
+  });
+  action(file, tr("Save &As…"), QKeySequence::SaveAs, saveAs);
+  file->addSeparator();
+  QMenu* exportMenu = file->addMenu(tr("&Export"));
+  auto exportTo = [this](const QString& title, const QString& name, const QString& filter,
+                         bool (MainWindow::*fn)(const QString&, QString*)) {
+    return [=, this] {
+      const QString path = QFileDialog::getSaveFileName(this, title, name, filter);
+      QString error;
+      if (!path.isEmpty() && !(this->*fn)(path, &error)) QMessageBox::warning(this, title, error);
+    };
+  };
+  action(exportMenu, tr("Motion (JSON)…"), QKeySequence(), exportTo(tr("Export motion"), "motion.json", "JSON (*.json)", &MainWindow::exportMotionJson));
+  action(exportMenu, tr("Motion (CSV)…"), QKeySequence(), exportTo(tr("Export motion"), "motion.csv", "CSV (*.csv)", &MainWindow::exportMotionCsv));
+  auto exportDir = [this](const QString& title, bool (MainWindow::*fn)(const QString&, QString*)) {
+    return [=, this] {
+      const QString dir = QFileDialog::getExistingDirectory(this, title);
+      QString error;
+      if (!dir.isEmpty() && !(this->*fn)(dir, &error)) QMessageBox::warning(this, title, error);
+    };
+  };
+  action(exportMenu, tr("URDF…"), QKeySequence(), exportDir(tr("Export URDF"), &MainWindow::exportUrdf));
+  action(exportMenu, tr("PNG image sequence…"), QKeySequence(), exportDir(tr("Export images"), &MainWindow::exportImageSequence));
+  file->addSeparator();
+  action(file, tr("&Quit"), QKeySequence::Quit, [this] { close(); });
+
+  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+  QAction* undo = doc_.undoStack()->createUndoAction(this, tr("&Undo"));
+  undo->setShortcut(QKeySequence::Undo);
+  QAction* redo = doc_.undoStack()->createRedoAction(this, tr("&Redo"));
+  redo->setShortcut(QKeySequence::Redo);
+  edit->addAction(undo);
+  edit->addAction(redo);
+  edit->addSeparator();
+  QAction* pinTool = action(edit, tr("Add &pin by clicking a body"), QKeySequence(Qt::Key_P), [this] { viewport_->setPinTool(true); });
+  action(edit, tr("&Key the current pose"), QKeySequence(Qt::Key_K), [this] { constraints_->keyCurrentPose(); });
+  action(edit, tr("&Delete term"), QKeySequence::Delete, [this] { constraints_->removeSelected(); });
+
+  QMenu* view = menuBar()->addMenu(tr("&View"));
+  view->setObjectName("viewMenu");
+  action(view, tr("&Frame all"), QKeySequence(Qt::Key_Home), [this] { viewport_->frameAll(); });
+  action(view, tr("Front"), QKeySequence(Qt::KeypadModifier | Qt::Key_1), [this] { viewport_->camera().front(); viewport_->update(); });
+  action(view, tr("Side"), QKeySequence(Qt::KeypadModifier | Qt::Key_3), [this] { viewport_->camera().side(); viewport_->update(); });
+  action(view, tr("Top"), QKeySequence(Qt::KeypadModifier | Qt::Key_7), [this] { viewport_->camera().top(); viewport_->update(); });
+  action(view, tr("Perspective / orthographic"), QKeySequence(Qt::KeypadModifier | Qt::Key_5), [this] {
+    viewport_->camera().orthographic = !viewport_->camera().orthographic;
+    viewport_->update();
+  });
+  view->addSeparator();
+  auto toggle = [&](const QString& text, bool on, std::function<void(bool)> set) {
+    QAction* a = view->addAction(text);
+    a->setCheckable(true);
+    a->setChecked(on);
+    connect(a, &QAction::toggled, this, [this, set](bool v) { set(v); viewport_->invalidate(); });
+  };
+  toggle(tr("Ghosts"), true, [this](bool v) { viewport_->options().ghosts = v ? 2 : 0; });
+  toggle(tr("Motion trail"), true, [this](bool v) { viewport_->options().trail = v; });
+  toggle(tr("Centre-of-mass path"), true, [this](bool v) { viewport_->options().centerOfMass = v; });
+  toggle(tr("Contact forces"), true, [this](bool v) { viewport_->options().forces = v; });
+  view->addSeparator();
+
+  QMenu* play = menuBar()->addMenu(tr("&Playback"));
+  action(play, tr("Play / pause"), QKeySequence(Qt::Key_Space), [this] { timeline_->togglePlay(); });
+  action(play, tr("Next frame"), QKeySequence(Qt::Key_Right), [this] { timeline_->step(1); });
+  action(play, tr("Previous frame"), QKeySequence(Qt::Key_Left), [this] { timeline_->step(-1); });
+
+  QMenu* solveMenu = menuBar()->addMenu(tr("&Solve"));
+  solveAction_ = action(solveMenu, tr("&Solve"), QKeySequence(Qt::Key_F5), [this] { solve(); });
+  stopAction_ = action(solveMenu, tr("S&top"), QKeySequence(Qt::Key_Escape), [this] { stopSolve(); });
+  stopAction_->setEnabled(false);
+  autoSolveAction_ = solveMenu->addAction(tr("&Auto-solve after every edit"));
+  autoSolveAction_->setCheckable(true);
+  autoSolveAction_->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_R));
+  connect(autoSolveAction_, &QAction::toggled, this, [this](bool on) { setAutoSolve(on); });
+
+  QToolBar* bar = addToolBar(tr("Main"));
+  bar->setObjectName("mainToolBar");
+  for (QAction* a : {solveAction_, stopAction_, autoSolveAction_}) bar->addAction(a);
+  bar->addSeparator();
+  bar->addAction(undo);
+  bar->addAction(redo);
+  bar->addSeparator();
+  bar->addAction(pinTool);
+  pinTool->setCheckable(true);
+  connect(viewport_, &Viewport::pinToolUsed, pinTool, [pinTool] { pinTool->setChecked(false); });
+}
+
+QString MainWindow::statusText() const { return progress_->text(); }
+
+void MainWindow::updateTitle() {
+  const QString name = doc_.filePath().isEmpty() ? QString::fromStdString(doc_.scene().name) : QFileInfo(doc_.filePath()).fileName();
+  setWindowTitle(QString("%1%2 — Spacetime").arg(name, doc_.isModified() ? "*" : ""));
+}
+
+bool MainWindow::openFile(const QString& path, QString* error) {
+  job_.cancel();
+  if (!doc_.open(path, error)) return false;
+  if (!path.startsWith(":/")) addRecent(path);
+  viewport_->frameAll();
+  if (solveOnOpen && !doc_.motion()) solve();
+  return true;
+}
+
+bool MainWindow::saveFile(const QString& path, QString* error) {
+  if (!doc_.saveAs(path, error)) return false;
+  addRecent(path);
+  QFile::remove(autosavePath());
+  updateTitle();
+  return true;
+}
+
+void MainWindow::solve() {
+  std::optional<SolutionState> warm;
+  if (doc_.motion()) warm = doc_.motion()->state;
+  job_.start(doc_.scene(), warm);
+  solveAction_->setEnabled(false);
+  stopAction_->setEnabled(true);
+  progress_->setText(tr("Solving…"));
+}
+
+void MainWindow::stopSolve() { job_.cancel(); }
+
+void MainWindow::setAutoSolve(bool on) {
+  autoSolve_ = on;
+  if (autoSolveAction_->isChecked() != on) autoSolveAction_->setChecked(on);
+  if (on) solve();
+}
+
+bool MainWindow::exportMotionJson(const QString& path, QString* error) {
+  if (!doc_.motion()) { *error = tr("Nothing to export: solve first."); return false; }
+  std::string why;
+  if (writeFileAtomically(path.toStdString(), motionJson(doc_.motion()->animation), &why)) return true;
+  *error = QString::fromStdString(why);
+  return false;
+}
+
+bool MainWindow::exportMotionCsv(const QString& path, QString* error) {
+  if (!doc_.motion()) { *error = tr("Nothing to export: solve first."); return false; }
+  std::string why;
+  if (writeFileAtomically(path.toStdString(), motionCsv(doc_.motion()->animation), &why)) return true;
+  *error = QString::fromStdString(why);
+  return false;
+}
+
+bool MainWindow::exportUrdf(const QString& directory, QString* error) {
+  QDir().mkpath(directory);
+  for (const CharacterSpec& c : doc_.scene().characters) {
+    const Model<double> model = buildModel(c, doc_.scene().gravity);
+    std::string why;
+    const QString path = directory + "/" + QString::fromStdString(c.id) + ".urdf";
+    if (!writeFileAtomically(path.toStdString(), spacetime::exportUrdf(model, c).xml, &why)) {
+      *error = QString::fromStdString(why);
+      return false;
+    }
+  }
+  return true;
+}
+
+bool MainWindow::exportImageSequence(const QString& directory, QString* error) {
+  if (!QDir().mkpath(directory)) { *error = tr("%1: cannot create the folder").arg(directory); return false; }
+  const Scene& s = doc_.scene();
+  const double before = doc_.currentTime();
+  const int fps = timeline_->framesPerSecond();
+  const int frames = static_cast<int>(std::floor((s.endTime - s.startTime) * fps + 1e-9)) + 1;
+  for (int f = 0; f < frames; ++f) {
+    doc_.setCurrentTime(s.startTime + static_cast<double>(f) / fps);
+    const QImage image = viewport_->grabFramebuffer();
+    const QString path = QString("%1/frame_%2.png").arg(directory).arg(f, 4, 10, QChar('0'));
+    if (!image.save(path)) {
+      *error = tr("%1: cannot write the image").arg(path);
+      doc_.setCurrentTime(before);
+      return false;
+    }
+  }
+  doc_.setCurrentTime(before);
+  return true;
+}
+
+QString MainWindow::autosavePath() const { return autosaveDirectory() + "/" + autosaveId_ + ".json"; }
+
+bool MainWindow::writeAutosave() {
+  if (!doc_.isModified()) return false;
+  QDir().mkpath(autosaveDirectory());
+  std::string why;
+  return saveSceneFile(doc_.sceneForSave(), autosavePath().toStdString(), &why);
+}
+
+QStringList MainWindow::pendingRecoveries() {
+  QDir dir(autosaveDirectory());
+  QStringList out;
+  for (const QString& name : dir.entryList({"*.json"}, QDir::Files, QDir::Time)) out << dir.filePath(name);
+  return out;
+}
+
+void MainWindow::offerRecovery() {
+  // Files left by a session that did not close cleanly (ours are removed on close).
+  QStringList files = pendingRecoveries();
+  files.removeAll(autosavePath());
+  if (files.isEmpty() || qEnvironmentVariableIsSet("SPACETIME_NO_RECOVERY")) return;
+  const auto answer = QMessageBox::question(
+      this, tr("Recover"), tr("Spacetime did not close cleanly. Recover the unsaved scene autosaved at %1?")
+                               .arg(QFileInfo(files.front()).lastModified().toString()),
+      QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
+  if (answer == QMessageBox::Yes) {
+    QString error;
+    if (doc_.open(files.front(), &error)) {
+      // A recovered scene has no file yet: Save asks where.
+      Scene s = doc_.sceneForSave();
+      doc_.reset(s, {});
+      doc_.edit(tr("Recover"), [](Scene&) {});
+    }
+  }
+  if (answer != QMessageBox::No)
+    for (const QString& f : files) QFile::remove(f);
+}
+
+bool MainWindow::maybeSave() {
+  if (!doc_.isModified()) return true;
+  const auto answer = QMessageBox::warning(this, tr("Unsaved changes"), tr("The scene has unsaved changes. Save them?"),
+                                           QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel);
+  if (answer == QMessageBox::Cancel) return false;
+  if (answer == QMessageBox::Discard) return true;
+  QString path = doc_.filePath();
+  if (path.isEmpty()) path = QFileDialog::getSaveFileName(this, tr("Save scene"), "scene.json", tr("Spacetime scenes (*.json)"));
+  if (path.isEmpty()) return false;
+  QString error;
+  if (!saveFile(path, &error)) {
+    QMessageBox::warning(this, tr("Save"), error);
+    return false;
+  }
+  return true;
+}
+
+void MainWindow::addRecent(const QString& path) {
+  QSettings settings;
+  QStringList recent = settings.value("recentFiles").toStringList();
+  recent.removeAll(path);
+  recent.prepend(QFileInfo(path).absoluteFilePath());
+  while (recent.size() > 10) recent.removeLast();
+  settings.setValue("recentFiles", recent);
+  rebuildRecentMenu();
+}
+
+void MainWindow::rebuildRecentMenu() {
+  recentMenu_->clear();
+  for (const QString& path : QSettings().value("recentFiles").toStringList())
+    recentMenu_->addAction(path, this, [this, path] {
+      if (!maybeSave()) return;
+      QString error;
+      if (!openFile(path, &error)) QMessageBox::warning(this, tr("Open"), error);
+    });
+  recentMenu_->setEnabled(!recentMenu_->isEmpty());
+}
+
+void MainWindow::closeEvent(QCloseEvent* e) {
+  if (!maybeSave()) {
+    e->ignore();
+    return;
+  }
+  job_.cancel();
+  QSettings settings;
+  settings.setValue("window/geometry", saveGeometry());
+  settings.setValue("window/state", saveState());
+  QFile::remove(autosavePath());
+  e->accept();
+}
+
+void MainWindow::dragEnterEvent(QDragEnterEvent* e) {
+  if (e->mimeData()->hasUrls() && e->mimeData()->urls().front().toLocalFile().endsWith(".json")) e->acceptProposedAction();
+}
+
+void MainWindow::dropEvent(QDropEvent* e) {
+  const QString path = e->mimeData()->urls().front().toLocalFile();
+  if (!maybeSave()) return;
+  QString error;
+  if (!openFile(path, &error)) QMessageBox::warning(this, tr("Open"), error);
+}
+
+}  // namespace spacetime::ui

@@ -1,0 +1,258 @@
+#include "ui/render_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/gtc/constants.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "dynamics/algorithms.h"
+
+namespace spacetime::ui {
+
+namespace {
+
+glm::vec3 toGlm(const Eigen::Vector3d& v) {
+  return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+}
+
+// World pose of a body: Featherstone's X_world maps world to body coordinates, so the body's
+// orientation in the world is E^T and its origin is r.
+glm::mat4 bodyPose(const Data<double>& d, int body) {
+  const Transform<double>& X = d.X_world[body];
+  glm::mat4 m(1.0f);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m[c][r] = static_cast<float>(X.E(c, r));  // column-major E^T
+  m[3] = glm::vec4(toGlm(X.r), 1.0f);
+  return m;
+}
+
+// Rotation taking the unit meshes' y axis to the geometry's axis.
+glm::mat4 axisRotation(int axis) {
+  if (axis == 0) return glm::rotate(glm::mat4(1.0f), -glm::half_pi<float>(), glm::vec3(0, 0, 1));
+  if (axis == 2) return glm::rotate(glm::mat4(1.0f), glm::half_pi<float>(), glm::vec3(1, 0, 0));
+  return glm::mat4(1.0f);
+}
+
+void addGeometry(RenderScene& rs, const Geometry& g, const glm::mat4& pose, const glm::vec4& color,
+                 int character, const std::string& body, bool ghost) {
+  const glm::mat4 base = glm::translate(pose, toGlm(g.offset));
+  auto add = [&](Mesh mesh, const glm::mat4& m) { rs.solids.push_back({mesh, m, color, character, body, ghost}); };
+  const float r = static_cast<float>(g.size[0]), len = static_cast<float>(g.size[1]);
+  switch (g.kind) {
+    case GeometryKind::None:  // a small marker so the body stays visible and pickable
+      add(Mesh::Sphere, glm::scale(base, glm::vec3(0.02f)));
+      break;
+    case GeometryKind::Box: add(Mesh::Cube, glm::scale(base, toGlm(g.size))); break;
+    case GeometryKind::Sphere: add(Mesh::Sphere, glm::scale(base, glm::vec3(r))); break;
+    case GeometryKind::Cylinder:
+      add(Mesh::Cylinder, glm::scale(base * axisRotation(g.axis), glm::vec3(r, len, r)));
+      break;
+    case GeometryKind::Capsule: {
+      const glm::mat4 a = base * axisRotation(g.axis);
+      add(Mesh::Cylinder, glm::scale(a, glm::vec3(r, len, r)));
+      add(Mesh::Sphere, glm::scale(glm::translate(a, glm::vec3(0, len / 2, 0)), glm::vec3(r)));
+      add(Mesh::Sphere, glm::scale(glm::translate(a, glm::vec3(0, -len / 2, 0)), glm::vec3(r)));
+      break;
+    }
+  }
+}
+
+// An arrow from `from` to `to` as a cylinder shaft and a cone head.
+void addArrow(RenderScene& rs, const glm::vec3& from, const glm::vec3& to, const glm::vec4& color) {
+  const glm::vec3 d = to - from;
+  const float length = glm::length(d);
+  if (length < 1e-4f) return;
+  const glm::vec3 y = d / length;
+  const glm::vec3 helper = std::abs(y.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  const glm::vec3 x = glm::normalize(glm::cross(helper, y));
+  const glm::vec3 z = glm::cross(x, y);
+  glm::mat4 frame(glm::vec4(x, 0), glm::vec4(y, 0), glm::vec4(z, 0), glm::vec4(from, 1));
+  const float head = std::min(0.04f, 0.4f * length), radius = 0.006f;
+  const float shaft = length - head;
+  rs.solids.push_back({Mesh::Cylinder,
+                       glm::scale(glm::translate(frame, glm::vec3(0, shaft / 2, 0)), glm::vec3(radius, shaft, radius)),
+                       color, -1, {}, false});
+  rs.solids.push_back({Mesh::Cone,
+                       glm::scale(glm::translate(frame, glm::vec3(0, shaft + head / 2, 0)), glm::vec3(2.5f * radius, head, 2.5f * radius)),
+                       color, -1, {}, false});
+}
+
+void grow(RenderScene& rs, const glm::vec3& p, bool& first) {
+  if (first) {
+    rs.boundsMin = rs.boundsMax = p;
+    first = false;
+  }
+  rs.boundsMin = glm::min(rs.boundsMin, p);
+  rs.boundsMax = glm::max(rs.boundsMax, p);
+}
+
+}  // namespace
+
+std::vector<Eigen::VectorXd> posesAt(const Scene& scene, const std::vector<Model<double>>& models,
+                                     const SolvedMotion* motion, double t) {
+  std::vector<Eigen::VectorXd> poses;
+  for (size_t c = 0; c < models.size(); ++c) {
+    if (motion && c < motion->animation.characters.size())
+      poses.push_back(poseAt(motion->animation.characters[c], t));
+    else
+      poses.push_back(Eigen::VectorXd::Zero(models[c].dofCount()));
+  }
+  return poses;
+}
+
+RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>>& models,
+                             const SolvedMotion* motion, const RenderOptions& o) {
+  RenderScene rs;
+  rs.ground = scene.groundEnabled;
+  rs.groundHeight = static_cast<float>(scene.groundHeight);
+  bool firstBound = true;
+  if (models.size() != scene.characters.size()) return rs;
+
+  auto drawCharacters = [&](double t, bool ghost, float alpha) {
+    const std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, t);
+    for (size_t c = 0; c < models.size(); ++c) {
+      Data<double> d(models[c]);
+      forwardKinematics(models[c], d, poses[c].data());
+      for (const BodySpec& b : scene.characters[c].bodies) {
+        const int i = models[c].bodyIndex(b.id);
+        if (i < 0) continue;
+        glm::vec4 color(toGlm(b.color), alpha);
+        if (!ghost && static_cast<int>(c) == o.selectedCharacter && b.id == o.selectedBody)
+          color = glm::vec4(glm::mix(glm::vec3(color), glm::vec3(1.0f, 0.55f, 0.1f), 0.6f), 1.0f);
+        addGeometry(rs, b.geometry, bodyPose(d, i), color, static_cast<int>(c), b.id, ghost);
+      }
+    }
+  };
+  drawCharacters(o.time, false, 1.0f);
+  if (motion && o.ghosts > 0)
+    for (int k = -o.ghosts; k <= o.ghosts; ++k) {
+      const double t = o.time + k * o.ghostSpacing;
+      if (k == 0 || t < scene.startTime - 1e-9 || t > scene.endTime + 1e-9) continue;
+      drawCharacters(t, true, 0.35f - 0.05f * std::abs(k));
+    }
+
+  // Trails and bounds over the whole clip.
+  const int frames = 121;
+  for (size_t c = 0; c < models.size(); ++c) {
+    const Model<double>& model = models[c];
+    Data<double> d(model);
+    Polyline com{{}, glm::vec4(0.95f, 0.3f, 0.25f, 1.0f)};
+    Polyline trail{{}, glm::vec4(0.2f, 0.6f, 1.0f, 1.0f)};
+    const bool trailHere = static_cast<int>(c) == o.selectedCharacter && !o.selectedBody.empty();
+    const int trailBody = trailHere ? model.bodyIndex(o.selectedBody) : -1;
+    for (int f = 0; f < frames; ++f) {
+      const double t = scene.startTime + (scene.endTime - scene.startTime) * f / (frames - 1);
+      const Eigen::VectorXd q = posesAt(scene, models, motion, t)[c];
+      forwardKinematics(model, d, q.data());
+      for (int b = 0; b < model.bodyCount(); ++b)
+        if (!model.bodies[b].isVirtual) grow(rs, toGlm(d.X_world[b].r), firstBound);
+      if (o.centerOfMass && model.totalMass() > 0) com.points.push_back(toGlm(centerOfMass(model, d)));
+      if (o.trail && trailBody >= 0) trail.points.push_back(toGlm(d.X_world[trailBody].r));
+    }
+    if (motion && com.points.size() > 1) rs.lines.push_back(com);
+    if (motion && trail.points.size() > 1) rs.lines.push_back(trail);
+  }
+
+  // Contact forces at the current time: arrows from each point, scaled by the weight.
+  if (motion && o.forces)
+    for (size_t c = 0; c < motion->animation.characters.size() && c < models.size(); ++c) {
+      const CharacterAnimation& a = motion->animation.characters[c];
+      if (a.times.empty()) continue;
+      const double weight = models[c].totalMass() * std::max(1.0, scene.gravity.norm());
+      const auto it = std::lower_bound(a.times.begin(), a.times.end(), o.time);
+      const size_t f = std::min<size_t>(it - a.times.begin(), a.times.size() - 1);
+      for (const ContactTrack& track : a.contacts) {
+        const Eigen::Vector3d F = track.force[f];
+        if (F.norm() < 1e-6 * weight) continue;
+        const glm::vec3 from = toGlm(track.position[f]);
+        addArrow(rs, from, from + toGlm(F / weight) * 0.5f, glm::vec4(0.2f, 0.85f, 0.3f, 1.0f));
+      }
+    }
+
+  // Pin handles: the target, and where the pinned point is at the current time.
+  const std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, o.time);
+  for (const TermSpec& t : scene.terms) {
+    if (t.kind != TermKind::Pin) continue;
+    const CharacterSpec* ch = scene.character(t.character);
+    if (!ch) continue;
+    const int c = static_cast<int>(ch - scene.characters.data());
+    const int b = models[c].bodyIndex(t.body);
+    if (b < 0) continue;
+    Handle h;
+    h.position = toGlm(t.position);
+    h.bodyPoint = toGlm(bodyToWorld(models[c], poses[c], b, t.point));
+    h.term = t.id;
+    h.selected = t.id == o.selectedTerm;
+    rs.handles.push_back(h);
+    grow(rs, h.position, firstBound);
+  }
+  return rs;
+}
+
+Eigen::Vector3d bodyToWorld(const Model<double>& model, const Eigen::VectorXd& q, int body,
+                            const Eigen::Vector3d& local) {
+  Data<double> d(model);
+  forwardKinematics(model, d, q.data());
+  return pointPosition(d, body, local);
+}
+
+Eigen::Vector3d worldToBody(const Model<double>& model, const Eigen::VectorXd& q, int body,
+                            const Eigen::Vector3d& world) {
+  Data<double> d(model);
+  forwardKinematics(model, d, q.data());
+  const Transform<double>& X = d.X_world[body];
+  return X.E * (world - X.r);
+}
+
+std::optional<Pick> pickSolid(const RenderScene& rs, const glm::vec3& origin, const glm::vec3& direction) {
+  std::optional<Pick> best;
+  for (size_t i = 0; i < rs.solids.size(); ++i) {
+    const Solid& s = rs.solids[i];
+    if (s.ghost || s.character < 0) continue;
+    // The ray in the unit mesh's coordinates; the parameter s is the same in both frames.
+    const glm::mat4 inv = glm::inverse(s.transform);
+    const glm::vec3 o = glm::vec3(inv * glm::vec4(origin, 1.0f));
+    const glm::vec3 d = glm::vec3(inv * glm::vec4(direction, 0.0f));
+    float hit = -1;
+    if (s.mesh == Mesh::Cube) {  // slab test against [-0.5, 0.5]^3
+      float t0 = -1e30f, t1 = 1e30f;
+      bool miss = false;
+      for (int a = 0; a < 3 && !miss; ++a) {
+        if (std::abs(d[a]) < 1e-12f) {
+          miss = std::abs(o[a]) > 0.5f;
+          continue;
+        }
+        float ta = (-0.5f - o[a]) / d[a], tb = (0.5f - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+      }
+      if (!miss && t0 <= t1 && t1 > 0) hit = t0 > 0 ? t0 : t1;
+    } else {
+      // Sphere: |o + s d| = 1. Cylinder and cone: x^2 + z^2 = 1 with |y| <= 0.5 (the cone's
+      // bounding cylinder is close enough for picking).
+      const bool sphere = s.mesh == Mesh::Sphere;
+      const float a = sphere ? glm::dot(d, d) : d.x * d.x + d.z * d.z;
+      const float b = sphere ? glm::dot(o, d) : o.x * d.x + o.z * d.z;
+      const float c = sphere ? glm::dot(o, o) - 1 : o.x * o.x + o.z * o.z - 1;
+      const float disc = b * b - a * c;
+      if (a > 1e-12f && disc >= 0) {
+        for (float t : {(-b - std::sqrt(disc)) / a, (-b + std::sqrt(disc)) / a})
+          if (t > 0 && (sphere || std::abs(o.y + t * d.y) <= 0.5f)) {
+            hit = t;
+            break;
+          }
+      }
+      if (!sphere && std::abs(d.y) > 1e-12f)  // the caps
+        for (float yc : {-0.5f, 0.5f}) {
+          const float t = (yc - o.y) / d.y;
+          const glm::vec3 p = o + t * d;
+          if (t > 0 && p.x * p.x + p.z * p.z <= 1 && (hit < 0 || t < hit)) hit = t;
+        }
+    }
+    if (hit > 0 && (!best || hit < best->distance)) best = Pick{static_cast<int>(i), hit, origin + hit * direction};
+  }
+  return best;
+}
+
+}  // namespace spacetime::ui

@@ -1,0 +1,148 @@
+#include "ui/solver_job.h"
+
+#include <QCoreApplication>
+#include <QElapsedTimer>
+#include <QPointer>
+#include <QThread>
+#include <thread>
+
+#include "core/scene_io.h"
+
+namespace spacetime::ui {
+
+struct SolverJob::Run {
+  int generation = 0;
+  std::atomic<bool> cancel{false};
+  std::thread thread;
+};
+
+SolverJob::SolverJob(QObject* parent) : QObject(parent) {
+  qRegisterMetaType<std::shared_ptr<const SolvedMotion>>();
+  qRegisterMetaType<SolverSummary>();
+}
+
+SolverJob::~SolverJob() {
+  cancel();
+  // Wait for every worker; they post through queued calls guarded by QPointer, so none touches
+  // this object after it is gone.
+  while (alive_ > 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  if (current_ && current_->thread.joinable()) current_->thread.join();
+}
+
+void SolverJob::cancel() {
+  if (current_) current_->cancel = true;
+}
+
+bool SolverJob::waitForFinished(int timeoutMs) {
+  QElapsedTimer timer;
+  timer.start();
+  while (running_ > 0 || deliveryQueued_) {
+    if (timer.elapsed() > timeoutMs) return false;
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+    QThread::msleep(1);
+  }
+  QCoreApplication::processEvents();
+  return true;
+}
+
+void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmStart) {
+  if (current_) {
+    current_->cancel = true;
+    current_->thread.detach();  // it ends on its own; its results carry an old generation
+  }
+  auto run = std::make_shared<Run>();
+  run->generation = ++generation_;
+  current_ = run;
+  ++running_;
+  ++alive_;
+  QPointer<SolverJob> self(this);
+  const int threadCount = threads;
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, threadCount]() {
+    auto fail = [&](const std::string& why) {
+      const QString reason = QString::fromStdString(why);
+      const int gen = run->generation;
+      QMetaObject::invokeMethod(
+          qApp, [self, reason, gen] { if (self && gen == self->generation_) emit self->failed(reason); },
+          Qt::QueuedConnection);
+    };
+    // The scene is checked exactly as a file would be, so an edit the loader would reject
+    // reports the same clear message instead of reaching the dynamics.
+    Scene snapshot = scene;
+    snapshot.solution.reset();
+    const SceneLoadResult checked = parseScene(sceneToJson(snapshot), snapshot.name.empty() ? "scene" : snapshot.name);
+    std::string error;
+    std::unique_ptr<SpacetimeProblem> problem;
+    if (!checked.scene) error = checked.error;
+    else problem = SpacetimeProblem::build(*checked.scene, &error);
+    if (!problem) {
+      fail(error);
+    } else {
+      SolverOptions options;
+      options.maxOuterIterations = scene.solver.maxOuterIterations;
+      options.maxInnerIterations = scene.solver.maxInnerIterations;
+      options.tolerance = scene.solver.tolerance;
+      options.threads = threadCount;
+      options.warmStart = warmStart && problem->restore(*warmStart);
+      {
+        auto first = sampleMotion(*problem);
+        const ProblemMeasures m = measure(*problem);
+        first->objective = m.objective;
+        first->maxViolation = m.maxViolation;
+        post(run, first);
+      }
+      const SolverSummary summary = solveSpacetime(
+          *problem, options,
+          [&](const IterationReport& r) {
+            auto motion = sampleMotion(*problem);
+            motion->objective = r.objective;
+            motion->maxViolation = r.maxViolation;
+            motion->iterations = r.iterations;
+            post(run, motion);
+            return !run->cancel.load();
+          },
+          &run->cancel);
+      auto final = sampleMotion(*problem);
+      final->objective = summary.objective;
+      final->maxViolation = summary.maxViolation;
+      final->iterations = summary.iterations;
+      final->solved = true;
+      final->converged = summary.converged;
+      final->reason = summary.reason;
+      const int gen = run->generation;
+      std::shared_ptr<const SolvedMotion> result = final;
+      QMetaObject::invokeMethod(
+          qApp,
+          [self, result, summary, gen] {
+            if (self && gen == self->generation_) emit self->finished(result, summary);
+          },
+          Qt::QueuedConnection);
+    }
+    // Decrement last, through the event loop, so waitForFinished sees the final signal first.
+    QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
+    --alive_;  // after this the thread touches nothing of the job
+  });
+}
+
+void SolverJob::post(const std::shared_ptr<Run>& run, std::shared_ptr<const SolvedMotion> motion) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_ = std::move(motion);
+  pendingGeneration_ = run->generation;
+  if (deliveryQueued_) return;  // the queued delivery will take the newest iterate
+  deliveryQueued_ = true;
+  QPointer<SolverJob> self(this);
+  QMetaObject::invokeMethod(qApp, [self] { if (self) self->deliver(0); }, Qt::QueuedConnection);
+}
+
+void SolverJob::deliver(int) {
+  std::shared_ptr<const SolvedMotion> motion;
+  int generation;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    motion = std::move(pending_);
+    generation = pendingGeneration_;
+    deliveryQueued_ = false;
+  }
+  if (motion && generation == generation_) emit iterate(motion);
+}
+
+}  // namespace spacetime::ui

@@ -1,0 +1,391 @@
+#include "ui/viewport.h"
+
+#include <QElapsedTimer>
+#include <QMouseEvent>
+#include <QWheelEvent>
+#include <cmath>
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+namespace spacetime::ui {
+
+namespace {
+
+using Vertices = std::vector<float>;  // interleaved position (3) and normal (3), triangles
+
+void push(Vertices& v, const glm::vec3& p, const glm::vec3& n) {
+  v.insert(v.end(), {p.x, p.y, p.z, n.x, n.y, n.z});
+}
+
+Vertices cubeMesh() {
+  Vertices v;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f}) {
+      glm::vec3 n(0.0f);
+      n[axis] = sign;
+      const glm::vec3 u = glm::vec3(n.y, n.z, n.x) * 0.5f, w = glm::vec3(n.z, n.x, n.y) * 0.5f;
+      const glm::vec3 c = n * 0.5f;
+      const glm::vec3 corners[4] = {c - u - w, c + u - w, c + u + w, c - u + w};
+      for (int i : {0, 1, 2, 0, 2, 3}) push(v, corners[i], n);
+    }
+  return v;
+}
+
+Vertices sphereMesh(int slices = 24, int stacks = 14) {
+  Vertices v;
+  auto at = [&](int i, int j) {
+    const float th = glm::pi<float>() * j / stacks, ph = glm::two_pi<float>() * i / slices;
+    return glm::vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+  };
+  for (int j = 0; j < stacks; ++j)
+    for (int i = 0; i < slices; ++i) {
+      const glm::vec3 a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      for (const glm::vec3& p : {a, b, c, a, c, d}) push(v, p, p);
+    }
+  return v;
+}
+
+// Radius 1, y in [-0.5, 0.5]; a cone when topRadius is 0.
+Vertices cylinderMesh(float topRadius, int slices = 24) {
+  Vertices v;
+  const float slope = 1.0f - topRadius;  // outward normal tilt per unit height
+  for (int i = 0; i < slices; ++i) {
+    const float a0 = glm::two_pi<float>() * i / slices, a1 = glm::two_pi<float>() * (i + 1) / slices;
+    const glm::vec3 d0(std::cos(a0), 0, std::sin(a0)), d1(std::cos(a1), 0, std::sin(a1));
+    const glm::vec3 n0 = glm::normalize(d0 + glm::vec3(0, slope, 0)), n1 = glm::normalize(d1 + glm::vec3(0, slope, 0));
+    const glm::vec3 b0 = d0 + glm::vec3(0, -0.5f, 0), b1 = d1 + glm::vec3(0, -0.5f, 0);
+    const glm::vec3 t0 = d0 * topRadius + glm::vec3(0, 0.5f, 0), t1 = d1 * topRadius + glm::vec3(0, 0.5f, 0);
+    push(v, b0, n0); push(v, t1, n1); push(v, b1, n1);
+    push(v, b0, n0); push(v, t0, n0); push(v, t1, n1);
+    const glm::vec3 down(0, -1, 0), up(0, 1, 0);
+    push(v, glm::vec3(0, -0.5f, 0), down); push(v, b1, down); push(v, b0, down);
+    if (topRadius > 0) { push(v, glm::vec3(0, 0.5f, 0), up); push(v, t0, up); push(v, t1, up); }
+  }
+  return v;
+}
+
+void pushLine(std::vector<float>& v, const glm::vec3& p, const glm::vec4& c) {
+  v.insert(v.end(), {p.x, p.y, p.z, c.r, c.g, c.b, c.a});
+}
+
+}  // namespace
+
+Viewport::Viewport(Document* doc, QWidget* parent) : QOpenGLWidget(parent), doc_(doc) {
+  setObjectName("viewport");
+  setMinimumSize(320, 240);
+  setFocusPolicy(Qt::StrongFocus);
+  for (auto signal : {&Document::sceneChanged, &Document::motionChanged, &Document::selectionChanged})
+    connect(doc_, signal, this, &Viewport::invalidate);
+  connect(doc_, &Document::currentTimeChanged, this, &Viewport::invalidate);
+  camera_.front();
+}
+
+Viewport::~Viewport() {
+  makeCurrent();
+  for (auto& m : meshes_) m.reset();
+  lineVbo_.destroy();
+  lineVao_.destroy();
+  solidShader_.reset();
+  lineShader_.reset();
+  doneCurrent();
+}
+
+void Viewport::invalidate() {
+  dirty_ = true;
+  update();
+}
+
+const RenderScene& Viewport::renderScene() {
+  if (dirty_) {
+    options_.time = doc_->currentTime();
+    options_.selectedCharacter = doc_->selectedCharacter();
+    options_.selectedBody = doc_->selectedBody();
+    options_.selectedTerm = doc_->selectedTerm();
+    scene_ = buildRenderScene(doc_->scene(), doc_->models(), doc_->motion().get(), options_);
+    dirty_ = false;
+    if (!framedOnce_ && !scene_.solids.empty()) {
+      framedOnce_ = true;
+      camera_.frame(scene_.boundsMin, scene_.boundsMax);
+    }
+  }
+  return scene_;
+}
+
+void Viewport::frameAll() {
+  const RenderScene& rs = renderScene();
+  camera_.frame(rs.boundsMin, rs.boundsMax);
+  update();
+}
+
+void Viewport::uploadMesh(Mesh mesh, const std::vector<float>& vertices) {
+  auto m = std::make_unique<GpuMesh>();
+  m->vao.create();
+  m->vao.bind();
+  m->vbo.create();
+  m->vbo.bind();
+  m->vbo.allocate(vertices.data(), static_cast<int>(vertices.size() * sizeof(float)));
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  m->count = static_cast<int>(vertices.size() / 6);
+  m->vao.release();
+  meshes_[static_cast<int>(mesh)] = std::move(m);
+}
+
+void Viewport::initializeGL() {
+  initializeOpenGLFunctions();
+  auto load = [](const char* vert, const char* frag) {
+    auto p = std::make_unique<QOpenGLShaderProgram>();
+    if (!p->addShaderFromSourceFile(QOpenGLShader::Vertex, vert) ||
+        !p->addShaderFromSourceFile(QOpenGLShader::Fragment, frag) || !p->link())
+      qWarning("viewport: shader %s/%s failed: %s", vert, frag, qPrintable(p->log()));
+    return p;
+  };
+  solidShader_ = load(":/shaders/solid.vert", ":/shaders/solid.frag");
+  lineShader_ = load(":/shaders/line.vert", ":/shaders/line.frag");
+  uploadMesh(Mesh::Cube, cubeMesh());
+  uploadMesh(Mesh::Sphere, sphereMesh());
+  uploadMesh(Mesh::Cylinder, cylinderMesh(1.0f));
+  uploadMesh(Mesh::Cone, cylinderMesh(0.0f));
+  lineVao_.create();
+  lineVao_.bind();
+  lineVbo_.create();
+  lineVbo_.setUsagePattern(QOpenGLBuffer::StreamDraw);
+  lineVbo_.bind();
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 7 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, 7 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  lineVao_.release();
+}
+
+void Viewport::resizeGL(int, int) {}
+
+void Viewport::drawSolid(const Solid& s, const glm::mat4& vp) {
+  solidShader_->setUniformValue("color", QVector4D(s.color.r, s.color.g, s.color.b, s.color.a));
+  glUniformMatrix4fv(solidShader_->uniformLocation("model"), 1, GL_FALSE, glm::value_ptr(s.transform));
+  const glm::mat3 normal = glm::inverseTranspose(glm::mat3(s.transform));
+  glUniformMatrix3fv(solidShader_->uniformLocation("normalMatrix"), 1, GL_FALSE, glm::value_ptr(normal));
+  GpuMesh& m = *meshes_[static_cast<int>(s.mesh)];
+  m.vao.bind();
+  glDrawArrays(GL_TRIANGLES, 0, m.count);
+  m.vao.release();
+  (void)vp;
+}
+
+void Viewport::drawLines(const std::vector<float>& v, GLenum mode, const glm::mat4& vp) {
+  if (v.empty()) return;
+  lineShader_->bind();
+  glUniformMatrix4fv(lineShader_->uniformLocation("viewProjection"), 1, GL_FALSE, glm::value_ptr(vp));
+  lineVao_.bind();
+  lineVbo_.bind();
+  lineVbo_.allocate(v.data(), static_cast<int>(v.size() * sizeof(float)));
+  glDrawArrays(mode, 0, static_cast<int>(v.size() / 7));
+  lineVao_.release();
+}
+
+void Viewport::paintGL() {
+  QElapsedTimer timer;
+  timer.start();
+  const RenderScene& rs = renderScene();
+  const float w = static_cast<float>(width()), h = static_cast<float>(height());
+  const glm::mat4 vp = camera_.projection(w / std::max(1.0f, h)) * camera_.view();
+
+  glClearColor(0.16f, 0.17f, 0.19f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glEnable(GL_BLEND);
+  // Blend colour only: the framebuffer's alpha stays 1, or the window compositor (and grabs)
+  // would see through the ghosts.
+  glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
+
+  // Ground grid: 10 cm minor lines, 50 cm major lines, the x axis red and the z axis blue.
+  std::vector<float> grid;
+  if (rs.ground) {
+    const float y = rs.groundHeight;
+    const float cx = std::round(camera_.target.x * 2) / 2, cz = std::round(camera_.target.z * 2) / 2;
+    const int n = 40;
+    for (int i = -n; i <= n; ++i) {
+      const float s = i * 0.1f;
+      const bool major = i % 5 == 0;
+      glm::vec4 cx4 = major ? glm::vec4(0.42f, 0.43f, 0.46f, 1) : glm::vec4(0.27f, 0.28f, 0.3f, 1);
+      glm::vec4 cz4 = cx4;
+      if (std::abs(cz + s) < 1e-4f) cx4 = glm::vec4(0.75f, 0.3f, 0.3f, 1);
+      if (std::abs(cx + s) < 1e-4f) cz4 = glm::vec4(0.3f, 0.4f, 0.8f, 1);
+      pushLine(grid, {cx - n * 0.1f, y, cz + s}, cx4);
+      pushLine(grid, {cx + n * 0.1f, y, cz + s}, cx4);
+      pushLine(grid, {cx + s, y, cz - n * 0.1f}, cz4);
+      pushLine(grid, {cx + s, y, cz + n * 0.1f}, cz4);
+    }
+  }
+  drawLines(grid, GL_LINES, vp);
+
+  solidShader_->bind();
+  glUniformMatrix4fv(solidShader_->uniformLocation("viewProjection"), 1, GL_FALSE, glm::value_ptr(vp));
+  const glm::vec3 eye = camera_.eye();
+  solidShader_->setUniformValue("eye", QVector3D(eye.x, eye.y, eye.z));
+  for (const Solid& s : rs.solids)
+    if (!s.ghost) drawSolid(s, vp);
+
+  // Trails, then the translucent ghosts (no depth writes, so they never hide each other).
+  for (const Polyline& l : rs.lines) {
+    std::vector<float> v;
+    for (const glm::vec3& p : l.points) pushLine(v, p, l.color);
+    drawLines(v, GL_LINE_STRIP, vp);
+  }
+  glDepthMask(GL_FALSE);
+  solidShader_->bind();
+  for (const Solid& s : rs.solids)
+    if (s.ghost) drawSolid(s, vp);
+  glDepthMask(GL_TRUE);
+
+  // Pin handles on top of everything: the target and a line from the pinned point.
+  glDisable(GL_DEPTH_TEST);
+  std::vector<float> pinLines;
+  for (const Handle& hd : rs.handles) {
+    const glm::vec4 c = hd.selected ? glm::vec4(1.0f, 0.55f, 0.1f, 1) : glm::vec4(1.0f, 0.85f, 0.2f, 1);
+    pushLine(pinLines, hd.bodyPoint, c);
+    pushLine(pinLines, hd.position, c);
+  }
+  drawLines(pinLines, GL_LINES, vp);
+  solidShader_->bind();
+  for (const Handle& hd : rs.handles) {
+    const float r = 0.012f * camera_.distance / 2.5f;
+    Solid s{Mesh::Sphere, glm::scale(glm::translate(glm::mat4(1.0f), hd.position), glm::vec3(r)),
+            hd.selected ? glm::vec4(1.0f, 0.55f, 0.1f, 1) : glm::vec4(1.0f, 0.85f, 0.2f, 1), -1, {}, false};
+    drawSolid(s, vp);
+  }
+  glEnable(GL_DEPTH_TEST);
+  lastFrameMs_ = timer.nsecsElapsed() * 1e-6;
+}
+
+double Viewport::renderFrameAndFinish() {
+  makeCurrent();
+  QElapsedTimer timer;
+  timer.start();
+  glBindFramebuffer(GL_FRAMEBUFFER, defaultFramebufferObject());
+  glViewport(0, 0, static_cast<GLsizei>(width() * devicePixelRatio()), static_cast<GLsizei>(height() * devicePixelRatio()));
+  paintGL();
+  glFinish();
+  return timer.nsecsElapsed() * 1e-6;
+}
+
+QPointF Viewport::toPixel(const glm::vec3& p) const {
+  const glm::vec2 px = camera_.project(p, static_cast<float>(width()), static_cast<float>(height()));
+  return {px.x, px.y};
+}
+
+int Viewport::handleAt(const QPointF& pos) {
+  const RenderScene& rs = renderScene();
+  for (size_t i = 0; i < rs.handles.size(); ++i) {
+    const QPointF d = toPixel(rs.handles[i].position) - pos;
+    if (std::hypot(d.x(), d.y()) < 10) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void Viewport::mousePressEvent(QMouseEvent* e) {
+  last_ = pressPos_ = e->position();
+  const bool orbitButton = e->button() == Qt::MiddleButton ||
+                           (e->button() == Qt::LeftButton && (e->modifiers() & Qt::AltModifier));
+  if (orbitButton) {
+    drag_ = (e->modifiers() & Qt::ShiftModifier) ? Drag::Pan
+            : (e->modifiers() & Qt::ControlModifier) ? Drag::Zoom : Drag::Orbit;
+  } else if (e->button() == Qt::RightButton) {
+    drag_ = Drag::Pan;
+  } else if (e->button() == Qt::LeftButton) {
+    const int h = handleAt(e->position());
+    if (h >= 0) {
+      const Handle& hd = renderScene().handles[h];
+      drag_ = Drag::Handle;
+      dragTerm_ = hd.term;
+      ++dragSerial_;  // a new drag: a new undo command, merged only within this drag
+      doc_->selectTerm(hd.term);
+      dragPlanePoint_ = hd.position;
+      dragPlaneNormal_ = glm::normalize(camera_.eye() - camera_.target);
+    } else {
+      drag_ = Drag::Click;
+    }
+  }
+}
+
+void Viewport::mouseMoveEvent(QMouseEvent* e) {
+  const QPointF d = e->position() - last_;
+  last_ = e->position();
+  const float h = static_cast<float>(std::max(1, height()));
+  switch (drag_) {
+    case Drag::Orbit: camera_.orbit(-d.x() * 0.01f, d.y() * 0.01f); update(); break;
+    case Drag::Pan: camera_.pan(d.x() / h, d.y() / h); update(); break;
+    case Drag::Zoom: camera_.zoom(std::exp(d.y() * 0.01f)); update(); break;
+    case Drag::Handle: {
+      glm::vec3 o, dir;
+      camera_.ray(e->position().x(), e->position().y(), static_cast<float>(width()), h, &o, &dir);
+      const float denom = glm::dot(dir, dragPlaneNormal_);
+      if (std::abs(denom) < 1e-6f) break;
+      const glm::vec3 p = o + dir * (glm::dot(dragPlanePoint_ - o, dragPlaneNormal_) / denom);
+      const std::string term = dragTerm_;
+      doc_->edit(tr("Move pin"), [&](Scene& s) {
+        for (TermSpec& t : s.terms)
+          if (t.id == term) t.position = Eigen::Vector3d(p.x, p.y, p.z);
+      }, kMergePinDrag + (dragSerial_ & 0xFFFFF));
+      break;
+    }
+    default: break;
+  }
+}
+
+void Viewport::mouseReleaseEvent(QMouseEvent* e) {
+  if (drag_ == Drag::Click) {
+    const QPointF moved = e->position() - pressPos_;
+    if (std::hypot(moved.x(), moved.y()) < 4) clickAt(e->position());
+  }
+  drag_ = Drag::None;
+}
+
+void Viewport::clickAt(const QPointF& pos) {
+  glm::vec3 o, dir;
+  camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(height()), &o, &dir);
+  const RenderScene& rs = renderScene();
+  const std::optional<Pick> pick = pickSolid(rs, o, dir);
+  if (!pick) {
+    doc_->selectBody(doc_->selectedCharacter(), {});
+    return;
+  }
+  const Solid& s = rs.solids[pick->solid];
+  doc_->selectBody(s.character, s.body);
+  if (!pinTool_) return;
+  // Pin the clicked point of the body where it is now, at the current time.
+  const Model<double>& model = doc_->models()[s.character];
+  const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), doc_->currentTime())[s.character];
+  const Eigen::Vector3d world(pick->point.x, pick->point.y, pick->point.z);
+  const Eigen::Vector3d local = worldToBody(model, q, model.bodyIndex(s.body), world);
+  const std::string id = doc_->uniqueTermId("pin");
+  const std::string character = doc_->scene().characters[s.character].id;
+  const std::string body = s.body;
+  const double t = doc_->currentTime();
+  const bool planar = doc_->scene().characters[s.character].root == RootKind::Planar;
+  doc_->edit(tr("Add pin"), [&](Scene& sc) {
+    TermSpec pin;
+    pin.id = id;
+    pin.kind = TermKind::Pin;
+    pin.character = character;
+    pin.body = body;
+    pin.time = t;
+    pin.point = local;
+    pin.position = world;
+    if (planar) pin.axes = {true, true, false};
+    sc.terms.push_back(pin);
+  });
+  doc_->selectTerm(id);
+  pinTool_ = false;
+  emit pinToolUsed();
+}
+
+void Viewport::wheelEvent(QWheelEvent* e) {
+  camera_.zoom(std::exp(-e->angleDelta().y() / 120.0f * 0.12f));
+  update();
+}
+
+}  // namespace spacetime::ui
