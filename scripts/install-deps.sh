@@ -3,7 +3,9 @@
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config
           libeigen3-dev libceres-dev nlohmann-json3-dev
-          libgtest-dev libbenchmark-dev libmujoco-dev)
+          libgtest-dev libbenchmark-dev libmujoco-dev
+          qt6-base-dev libqt6opengl6-dev qt6-charts-dev libglm-dev libgl-dev
+          xvfb xauth)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
-# Quick start: install what is missing, build (Release), and solve the Luxo jump headless,
-# writing summary.json, motion.json and luxo.urdf into out/luxo_jump/.
+# Quick start: install what is missing, build (Release), and open the editor on the Luxo jump,
+# which solves as it opens. Without a display (no $DISPLAY or $WAYLAND_DISPLAY) it solves the
+# Luxo jump headless instead, writing summary.json, motion.json and luxo.urdf to out/luxo_jump/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
-cmake --build build -j2 --target spacetime-cli
+cmake --build build -j2 --target spacetime spacetime-cli
+if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ]; then
+  exec ./build/app/spacetime resources/scenes/luxo_jump.json
+fi
+echo "no display: solving headless"
 status=0
 ./build/app/spacetime-cli solve resources/scenes/luxo_jump.json --out out/luxo_jump "$@" || status=$?
 # Exit status 3 means the solve stopped without converging; its outputs are still written

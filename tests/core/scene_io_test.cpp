@@ -39,6 +39,21 @@ TEST(SceneIo, AtomicSaveThenLoad) {
   EXPECT_NE(error.find("/nonexistent-dir/x.json"), std::string::npos);
 }
 
+// A solution saved with the scene comes back bit for bit (the editor reopens the same motion).
+TEST(SceneIo, StoredSolutionRoundTripsExactly) {
+  const SceneLoadResult r = loadSceneFile(kScenes + "particle.json");
+  ASSERT_TRUE(r.scene) << r.error;
+  Scene s = *r.scene;
+  s.solution = StoredSolution{{0.1, -1.0 / 3.0, 1e-300, 123456.789012345678}, {2.0 / 7.0}, 1e4, true};
+  const SceneLoadResult back = parseScene(sceneToJson(s), "mem");
+  ASSERT_TRUE(back.scene && back.scene->solution) << back.error;
+  EXPECT_EQ(back.scene->solution->variables, s.solution->variables);
+  EXPECT_EQ(back.scene->solution->multipliers, s.solution->multipliers);
+  EXPECT_EQ(back.scene->solution->rho, 1e4);
+  EXPECT_TRUE(back.scene->solution->converged);
+  EXPECT_EQ(sceneToJson(*back.scene), sceneToJson(s));
+}
+
 struct BadCase {
   std::string json;
   std::string mustMention;
@@ -72,6 +87,8 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, R"([{"id": "p", "type": "contact", "character": "c", "body": "base", "points": [[0,0,0]], "start": 0.5, "end": 0.2}])"),
        "terms[0].end'"},
       {minimalWith(R"({"id": "base", "mass": 1, "masss": 2})"), "bodies[0].masss': unknown field"},
+      {minimalWith(body, "[]", R"("solution": {"variables": [1, "x"], "multipliers": []},)"),
+       "solution.variables[1]': value \"x\""},
       {minimalWith(R"({"id": "base", "mass": 1, "inertia": [1, 1, 5]})"), "triangle inequality"},
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
   };

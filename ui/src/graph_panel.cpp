@@ -183,7 +183,7 @@ GraphPanel::GraphPanel(Document* doc, QWidget* parent) : QWidget(parent), doc_(d
   chart->legend()->setAlignment(Qt::AlignBottom);
   chart->setMargins(QMargins(4, 4, 4, 4));
   view_ = new GraphView(chart);
-  view_->setRenderHint(QPainter::Antialiasing);
+  view_->setRenderHint(QPainter::Antialiasing, false);  // software-rendered: keep repaints cheap
   view_->setMouseTracking(true);
   view_->series = &plotted_;
   splitter->addWidget(view_);

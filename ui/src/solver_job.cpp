@@ -4,6 +4,10 @@
 #include <QElapsedTimer>
 #include <QPointer>
 #include <QThread>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <thread>
 
 #include "core/scene_io.h"
@@ -58,6 +62,10 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   QPointer<SolverJob> self(this);
   const int threadCount = threads;
   run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, threadCount]() {
+    // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
+    // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
+    // Linux applies nice values per thread.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 15);
     auto fail = [&](const std::string& why) {
       const QString reason = QString::fromStdString(why);
       const int gen = run->generation;

@@ -32,7 +32,9 @@ class SolverJob : public QObject {
   // Blocks (processing events) until no solve runs; false on timeout.
   bool waitForFinished(int timeoutMs);
 
-  int threads = 2;  // Ceres evaluation threads
+  // Ceres evaluation threads. One by default: on a 2-core machine the other core stays with the
+  // interface, which must never stall while the solver runs.
+  int threads = 1;
 
  signals:
   void iterate(std::shared_ptr<const spacetime::ui::SolvedMotion> motion);

@@ -1,0 +1,123 @@
+// The editor's speed on the Luxo jump, as the user feels it. Needs a display: run under Xvfb
+// (Mesa's llvmpipe software renderer) from a Release build:
+//   xvfb-run -a -s "-screen 0 1600x1000x24" ./build/tests/benchmarks/editor_benchmark
+//     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// and read the *_median rows.
+// - ViewportFrame: one frame of the solved Luxo jump (ghosts, trails, forces) at 1280x720,
+//   glFinish included (target: <= 16.7 ms, 60 fps).
+// - ScrubFrame: what one timeline step costs the interface: RenderScene rebuild + frame.
+// - MotionUpdate: what one solver iterate costs the interface thread: the viewport's
+//   RenderScene and the graph's three torque series.
+// - PinMoveToMotionOnScreen: a pin moved by 1 cm on an already solved scene, re-solved warm
+//   started with auto-solve, until the final motion is drawn (target: <= 100 ms).
+#include <benchmark/benchmark.h>
+
+#include <QApplication>
+#include <QElapsedTimer>
+#include <QSurfaceFormat>
+#include <QtTest>
+
+#include "ui/main_window.h"
+
+using namespace spacetime;
+using namespace spacetime::ui;
+
+namespace {
+
+MainWindow* solvedWindow(const QString& scene) {
+  auto* w = new MainWindow;
+  w->solveOnOpen = false;
+  w->resize(1600, 1000);
+  w->show();
+  QTest::qWaitForWindowExposed(w);
+  QString error;
+  if (!w->openFile(scene, &error)) qFatal("%s", qPrintable(error));
+  w->solve();
+  w->solverJob()->waitForFinished(600000);
+  w->document()->setCurrentTime(0.5 * (w->document()->scene().startTime + w->document()->scene().endTime));
+  w->viewport()->frameAll();
+  QApplication::processEvents();
+  return w;
+}
+
+MainWindow* luxo() {
+  static MainWindow* w = solvedWindow(":/scenes/luxo_jump.json");
+  return w;
+}
+
+void BM_ViewportFrame(benchmark::State& state) {
+  Viewport* v = luxo()->viewport();
+  v->resize(1280, 720);
+  v->renderScene();
+  for (auto _ : state) benchmark::DoNotOptimize(v->renderFrameAndFinish());
+}
+
+void BM_ScrubFrame(benchmark::State& state) {
+  MainWindow* w = luxo();
+  Viewport* v = w->viewport();
+  v->resize(1280, 720);
+  Document* doc = w->document();
+  int k = 0;
+  for (auto _ : state) {
+    doc->setCurrentTime(0.1 + 0.001 * (k++ % 1000));
+    v->renderScene();
+    v->renderFrameAndFinish();
+  }
+}
+
+void BM_MotionUpdate(benchmark::State& state) {
+  MainWindow* w = luxo();
+  Document* doc = w->document();
+  auto motion = doc->motion();
+  for (auto _ : state) {
+    doc->setMotion(motion);  // graphs replot, the viewport's RenderScene is invalidated
+    w->viewport()->renderScene();
+  }
+}
+
+void BM_PinMoveToMotionOnScreen(benchmark::State& state, const char* scene, const char* pin) {
+  static std::map<std::string, MainWindow*> windows;
+  if (!windows.count(scene)) windows[scene] = solvedWindow(scene);
+  MainWindow* w = windows[scene];
+  Document* doc = w->document();
+  bool converged = true;
+  double direction = 1;
+  for (auto _ : state) {
+    QElapsedTimer t;
+    t.start();
+    doc->edit("Move pin", [&](Scene& s) {
+      for (TermSpec& term : s.terms)
+        if (term.id == pin) term.position.y() += 0.01 * direction;
+    });
+    w->solve();
+    w->solverJob()->waitForFinished(600000);
+    w->viewport()->renderFrameAndFinish();
+    state.SetIterationTime(t.nsecsElapsed() * 1e-9);
+    converged = converged && doc->motion() && doc->motion()->converged;
+    direction = -direction;
+  }
+  state.counters["converged"] = converged ? 1 : 0;
+}
+
+}  // namespace
+
+BENCHMARK(BM_ViewportFrame)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ScrubFrame)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MotionUpdate)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_PinMoveToMotionOnScreen, particle, ":/scenes/particle.json", "p1")
+    ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(10);
+
+int main(int argc, char** argv) {
+  QSurfaceFormat format;
+  format.setVersion(3, 3);
+  format.setProfile(QSurfaceFormat::CoreProfile);
+  format.setDepthBufferSize(24);
+  QSurfaceFormat::setDefaultFormat(format);
+  qputenv("SPACETIME_NO_RECOVERY", "1");
+  QApplication app(argc, argv);
+  QStandardPaths::setTestModeEnabled(true);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
