@@ -9,7 +9,6 @@
 #include <QApplication>
 #include <QCommandLineParser>
 #include <QMessageBox>
-#include <QSurfaceFormat>
 #include <QThread>
 #include <QTimer>
 #include <cstdio>
@@ -17,13 +16,7 @@
 #include "ui/main_window.h"
 
 int main(int argc, char** argv) {
-  // OpenGL 3.3 core for every GL widget; set before the application exists.
-  QSurfaceFormat format;
-  format.setVersion(3, 3);
-  format.setProfile(QSurfaceFormat::CoreProfile);
-  format.setDepthBufferSize(24);
-  format.setSamples(4);
-  QSurfaceFormat::setDefaultFormat(format);
+  spacetime::ui::useOpenGL33CoreByDefault(4);
   QApplication app(argc, argv);
   QApplication::setOrganizationName("Spacetime");
   QApplication::setApplicationName("Spacetime");

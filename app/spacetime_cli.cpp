@@ -56,10 +56,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "spacetime-cli: %s: %s\n", scenePath.c_str(), error.c_str());
     return 2;
   }
-  SolverOptions options;
-  options.maxOuterIterations = loaded.scene->solver.maxOuterIterations;
-  options.maxInnerIterations = loaded.scene->solver.maxInnerIterations;
-  options.tolerance = loaded.scene->solver.tolerance;
+  SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = 2;  // Ceres evaluates residual blocks in parallel (kernels are thread-safe)
   ProgressCallback progress = nullptr;
   if (!quiet)

@@ -75,6 +75,14 @@ bool allFinite(const std::vector<double>& v) {
 
 }  // namespace
 
+SolverOptions solverOptionsFor(const SolverSpec& spec) {
+  SolverOptions options;
+  options.maxOuterIterations = spec.maxOuterIterations;
+  options.maxInnerIterations = spec.maxInnerIterations;
+  options.tolerance = spec.tolerance;
+  return options;
+}
+
 std::string SolverOptions::validate() const {
   if (maxOuterIterations < 1) return "maxOuterIterations must be at least 1";
   if (maxInnerIterations < 1) return "maxInnerIterations must be at least 1";

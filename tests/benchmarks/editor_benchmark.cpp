@@ -14,7 +14,6 @@
 
 #include <QApplication>
 #include <QElapsedTimer>
-#include <QSurfaceFormat>
 #include <QtTest>
 
 #include "ui/main_window.h"
@@ -108,11 +107,7 @@ BENCHMARK_CAPTURE(BM_PinMoveToMotionOnScreen, particle, ":/scenes/particle.json"
     ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(10);
 
 int main(int argc, char** argv) {
-  QSurfaceFormat format;
-  format.setVersion(3, 3);
-  format.setProfile(QSurfaceFormat::CoreProfile);
-  format.setDepthBufferSize(24);
-  QSurfaceFormat::setDefaultFormat(format);
+  useOpenGL33CoreByDefault();
   qputenv("SPACETIME_NO_RECOVERY", "1");
   QApplication app(argc, argv);
   QStandardPaths::setTestModeEnabled(true);

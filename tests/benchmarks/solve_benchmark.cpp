@@ -24,10 +24,7 @@ void BM_Solve(benchmark::State& state, const std::string& name) {
     std::string error;
     auto problem = SpacetimeProblem::build(scene, &error);
     state.ResumeTiming();
-    SolverOptions options;  // the scene's own settings, as spacetime-cli uses them
-    options.maxOuterIterations = scene.solver.maxOuterIterations;
-    options.maxInnerIterations = scene.solver.maxInnerIterations;
-    options.tolerance = scene.solver.tolerance;
+    SolverOptions options = solverOptionsFor(scene.solver);  // as spacetime-cli uses them
     options.maxSeconds = 120;
     const SolverSummary s = solveSpacetime(*problem, options);
     converged = converged && s.converged;

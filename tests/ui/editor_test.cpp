@@ -8,7 +8,6 @@
 #include <QElapsedTimer>
 #include <QLineEdit>
 #include <QStandardPaths>
-#include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
@@ -29,6 +28,20 @@ void setSpin(QWidget* vectorEditor, const char* axis, double value) {
   auto* spin = vectorEditor->findChild<QDoubleSpinBox*>(axis);
   QVERIFY(spin);
   spin->setValue(value);
+}
+
+// Opens the Luxo jump in a window that does not solve on its own; shown at `size` when given.
+bool openLuxo(MainWindow& w, std::optional<QSize> size = std::nullopt) {
+  w.solveOnOpen = false;
+  if (size) {
+    w.resize(*size);
+    w.show();
+    if (!QTest::qWaitForWindowExposed(&w)) return false;
+  }
+  QString error;
+  if (w.openFile(":/scenes/luxo_jump.json", &error)) return true;
+  qWarning("%s", qPrintable(error));
+  return false;
 }
 
 Scene emptyScene() {
@@ -97,13 +110,8 @@ class EditorTest : public QObject {
 
   void undoRedoRestoresIdenticalDocumentsForEveryKindOfEdit() {
     MainWindow w;
-    w.solveOnOpen = false;
-    w.resize(1400, 900);
-    w.show();
-    QVERIFY(QTest::qWaitForWindowExposed(&w));
+    QVERIFY(openLuxo(w, QSize(1400, 900)));
     Document& doc = *w.document();
-    QString error;
-    QVERIFY2(w.openFile(":/scenes/luxo_jump.json", &error), qPrintable(error));
     std::vector<std::string> states{json(doc)};
     auto step = [&](const char* what) {
       QVERIFY2(json(doc) != states.back(), what);  // every step is an edit
@@ -190,14 +198,7 @@ class EditorTest : public QObject {
   // plays, so every iterate and every frame is drawn.
   static std::pair<qint64, int> eventLoopStallDuringLuxoSolve(bool shown) {
     MainWindow w;
-    w.solveOnOpen = false;
-    w.resize(1400, 900);
-    if (shown) {
-      w.show();
-      if (!QTest::qWaitForWindowExposed(&w)) return {-1, 0};
-    }
-    QString error;
-    if (!w.openFile(":/scenes/luxo_jump.json", &error)) return {-1, 0};
+    if (!openLuxo(w, shown ? std::optional<QSize>(QSize(1400, 900)) : std::nullopt)) return {-1, 0};
     if (shown) w.timeline()->play();
     int iterates = 0;
     QObject::connect(w.solverJob(), &SolverJob::iterate, &w, [&] { ++iterates; });
@@ -234,9 +235,7 @@ class EditorTest : public QObject {
 
   void stopLeavesAConsistentDocument() {
     MainWindow w;
-    w.solveOnOpen = false;
-    QString error;
-    QVERIFY(w.openFile(":/scenes/luxo_jump.json", &error));
+    QVERIFY(openLuxo(w));
     const std::string before = json(*w.document());
     const int commands = w.document()->undoStack()->count();
     w.solve();
@@ -263,12 +262,7 @@ class EditorTest : public QObject {
 
   void viewportDrawsTheLampInItsColours() {
     MainWindow w;
-    w.solveOnOpen = false;
-    w.resize(1200, 800);
-    w.show();
-    QVERIFY(QTest::qWaitForWindowExposed(&w));
-    QString error;
-    QVERIFY(w.openFile(":/scenes/luxo_jump.json", &error));
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
     w.viewport()->frameAll();
     const QImage image = w.viewport()->grabFramebuffer();
     QVERIFY(!image.isNull());
@@ -291,12 +285,7 @@ class EditorTest : public QObject {
 
   void clickingABodySelectsIt() {
     MainWindow w;
-    w.solveOnOpen = false;
-    w.resize(1200, 800);
-    w.show();
-    QVERIFY(QTest::qWaitForWindowExposed(&w));
-    QString error;
-    QVERIFY(w.openFile(":/scenes/luxo_jump.json", &error));
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
     w.viewport()->frameAll();
     // The head's centre in the zero pose, projected, then clicked.
     const RenderScene& rs = w.viewport()->renderScene();
@@ -309,11 +298,7 @@ class EditorTest : public QObject {
 };
 
 int main(int argc, char** argv) {
-  QSurfaceFormat format;
-  format.setVersion(3, 3);
-  format.setProfile(QSurfaceFormat::CoreProfile);
-  format.setDepthBufferSize(24);
-  QSurfaceFormat::setDefaultFormat(format);
+  useOpenGL33CoreByDefault();
   QApplication app(argc, argv);
   QApplication::setOrganizationName("SpacetimeTest");
   QApplication::setApplicationName("SpacetimeTest");

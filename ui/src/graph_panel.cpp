@@ -83,7 +83,6 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
     }
     const Eigen::MatrixXd& m = kind == "q" ? a.q : kind == "qd" ? a.qd : kind == "qdd" ? a.qdd : a.tau;
     for (Eigen::Index f = 0; f < frames; ++f) out->values.push_back(m(f, d));
-    static const std::map<QString, QString> units{{"q", ""}, {"qd", "/s"}, {"qdd", "/s²"}, {"tau", ""}};
     out->name = kind + "." + parts.value(2);
     return true;
   }

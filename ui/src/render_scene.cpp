@@ -88,15 +88,19 @@ void grow(RenderScene& rs, const glm::vec3& p, bool& first) {
 
 }  // namespace
 
-std::vector<Eigen::VectorXd> posesAt(const Scene& scene, const std::vector<Model<double>>& models,
+namespace {
+// Character c's pose at t: the motion's, or the zero pose without one.
+Eigen::VectorXd characterPose(const std::vector<Model<double>>& models, const SolvedMotion* motion,
+                              size_t c, double t) {
+  if (motion && c < motion->animation.characters.size()) return poseAt(motion->animation.characters[c], t);
+  return Eigen::VectorXd::Zero(models[c].dofCount());
+}
+}  // namespace
+
+std::vector<Eigen::VectorXd> posesAt(const Scene&, const std::vector<Model<double>>& models,
                                      const SolvedMotion* motion, double t) {
   std::vector<Eigen::VectorXd> poses;
-  for (size_t c = 0; c < models.size(); ++c) {
-    if (motion && c < motion->animation.characters.size())
-      poses.push_back(poseAt(motion->animation.characters[c], t));
-    else
-      poses.push_back(Eigen::VectorXd::Zero(models[c].dofCount()));
-  }
+  for (size_t c = 0; c < models.size(); ++c) poses.push_back(characterPose(models, motion, c, t));
   return poses;
 }
 
@@ -142,7 +146,7 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
     const int trailBody = trailHere ? model.bodyIndex(o.selectedBody) : -1;
     for (int f = 0; f < frames; ++f) {
       const double t = scene.startTime + (scene.endTime - scene.startTime) * f / (frames - 1);
-      const Eigen::VectorXd q = posesAt(scene, models, motion, t)[c];
+      const Eigen::VectorXd q = characterPose(models, motion, c, t);
       forwardKinematics(model, d, q.data());
       for (int b = 0; b < model.bodyCount(); ++b)
         if (!model.bodies[b].isVirtual) grow(rs, toGlm(d.X_world[b].r), firstBound);

@@ -40,7 +40,11 @@ void SolverJob::cancel() {
 bool SolverJob::waitForFinished(int timeoutMs) {
   QElapsedTimer timer;
   timer.start();
-  while (running_ > 0 || deliveryQueued_) {
+  auto delivering = [this] {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return deliveryQueued_;
+  };
+  while (running_ > 0 || delivering()) {
     if (timer.elapsed() > timeoutMs) return false;
     QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
     QThread::msleep(1);
@@ -85,10 +89,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
     if (!problem) {
       fail(error);
     } else {
-      SolverOptions options;
-      options.maxOuterIterations = scene.solver.maxOuterIterations;
-      options.maxInnerIterations = scene.solver.maxInnerIterations;
-      options.tolerance = scene.solver.tolerance;
+      SolverOptions options = solverOptionsFor(scene.solver);
       options.threads = threadCount;
       options.warmStart = warmStart && problem->restore(*warmStart);
       {
@@ -138,10 +139,10 @@ void SolverJob::post(const std::shared_ptr<Run>& run, std::shared_ptr<const Solv
   if (deliveryQueued_) return;  // the queued delivery will take the newest iterate
   deliveryQueued_ = true;
   QPointer<SolverJob> self(this);
-  QMetaObject::invokeMethod(qApp, [self] { if (self) self->deliver(0); }, Qt::QueuedConnection);
+  QMetaObject::invokeMethod(qApp, [self] { if (self) self->deliver(); }, Qt::QueuedConnection);
 }
 
-void SolverJob::deliver(int) {
+void SolverJob::deliver() {
   std::shared_ptr<const SolvedMotion> motion;
   int generation;
   {

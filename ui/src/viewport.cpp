@@ -2,6 +2,7 @@
 
 #include <QElapsedTimer>
 #include <QMouseEvent>
+#include <QSurfaceFormat>
 #include <QWheelEvent>
 #include <cmath>
 #include <glm/gtc/matrix_inverse.hpp>
@@ -69,6 +70,15 @@ void pushLine(std::vector<float>& v, const glm::vec3& p, const glm::vec4& c) {
 }
 
 }  // namespace
+
+void useOpenGL33CoreByDefault(int samples) {
+  QSurfaceFormat format;
+  format.setVersion(3, 3);
+  format.setProfile(QSurfaceFormat::CoreProfile);
+  format.setDepthBufferSize(24);
+  format.setSamples(samples);
+  QSurfaceFormat::setDefaultFormat(format);
+}
 
 Viewport::Viewport(Document* doc, QWidget* parent) : QOpenGLWidget(parent), doc_(doc) {
   setObjectName("viewport");
@@ -160,9 +170,7 @@ void Viewport::initializeGL() {
   lineVao_.release();
 }
 
-void Viewport::resizeGL(int, int) {}
-
-void Viewport::drawSolid(const Solid& s, const glm::mat4& vp) {
+void Viewport::drawSolid(const Solid& s) {
   solidShader_->setUniformValue("color", QVector4D(s.color.r, s.color.g, s.color.b, s.color.a));
   glUniformMatrix4fv(solidShader_->uniformLocation("model"), 1, GL_FALSE, glm::value_ptr(s.transform));
   const glm::mat3 normal = glm::inverseTranspose(glm::mat3(s.transform));
@@ -171,7 +179,6 @@ void Viewport::drawSolid(const Solid& s, const glm::mat4& vp) {
   m.vao.bind();
   glDrawArrays(GL_TRIANGLES, 0, m.count);
   m.vao.release();
-  (void)vp;
 }
 
 void Viewport::drawLines(const std::vector<float>& v, GLenum mode, const glm::mat4& vp) {
@@ -227,7 +234,7 @@ void Viewport::paintGL() {
   const glm::vec3 eye = camera_.eye();
   solidShader_->setUniformValue("eye", QVector3D(eye.x, eye.y, eye.z));
   for (const Solid& s : rs.solids)
-    if (!s.ghost) drawSolid(s, vp);
+    if (!s.ghost) drawSolid(s);
 
   // Trails, then the translucent ghosts (no depth writes, so they never hide each other).
   for (const Polyline& l : rs.lines) {
@@ -238,7 +245,7 @@ void Viewport::paintGL() {
   glDepthMask(GL_FALSE);
   solidShader_->bind();
   for (const Solid& s : rs.solids)
-    if (s.ghost) drawSolid(s, vp);
+    if (s.ghost) drawSolid(s);
   glDepthMask(GL_TRUE);
 
   // Pin handles on top of everything: the target and a line from the pinned point.
@@ -255,7 +262,7 @@ void Viewport::paintGL() {
     const float r = 0.012f * camera_.distance / 2.5f;
     Solid s{Mesh::Sphere, glm::scale(glm::translate(glm::mat4(1.0f), hd.position), glm::vec3(r)),
             hd.selected ? glm::vec4(1.0f, 0.55f, 0.1f, 1) : glm::vec4(1.0f, 0.85f, 0.2f, 1), -1, {}, false};
-    drawSolid(s, vp);
+    drawSolid(s);
   }
   glEnable(GL_DEPTH_TEST);
   lastFrameMs_ = timer.nsecsElapsed() * 1e-6;

@@ -32,6 +32,9 @@ struct SolverOptions {
   std::string validate() const;  // empty if valid, else what is wrong
 };
 
+// The options a scene asks for (its `solver` block); the rest keep their defaults.
+SolverOptions solverOptionsFor(const SolverSpec& spec);
+
 struct IterationReport {
   int outer = 0;
   int iterations = 0;       // Levenberg-Marquardt iterations so far

@@ -45,7 +45,7 @@ class SolverJob : public QObject {
  private:
   struct Run;
   void post(const std::shared_ptr<Run>& run, std::shared_ptr<const SolvedMotion> motion);
-  void deliver(int generation);
+  void deliver();  // emits the pending iterate, if it belongs to the current solve
 
   std::shared_ptr<Run> current_;
   std::atomic<int> running_{0};  // solves whose end the interface has not yet seen

@@ -21,6 +21,10 @@
 
 namespace spacetime::ui {
 
+// Makes OpenGL 3.3 core (with a depth buffer and `samples` MSAA samples) the default for every
+// GL widget. Call before the QApplication exists.
+void useOpenGL33CoreByDefault(int samples = 0);
+
 class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   Q_OBJECT
  public:
@@ -49,7 +53,6 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
 
  protected:
   void initializeGL() override;
-  void resizeGL(int w, int h) override;
   void paintGL() override;
   void mousePressEvent(QMouseEvent* e) override;
   void mouseMoveEvent(QMouseEvent* e) override;
@@ -63,7 +66,7 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
     int count = 0;
   };
   void uploadMesh(Mesh mesh, const std::vector<float>& vertices);
-  void drawSolid(const Solid& s, const glm::mat4& viewProjection);
+  void drawSolid(const Solid& s);  // with the solid shader bound
   void drawLines(const std::vector<float>& vertices, GLenum mode, const glm::mat4& viewProjection);
   void clickAt(const QPointF& pos);
   int handleAt(const QPointF& pos);
