@@ -288,7 +288,7 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       break;
     case TermKind::Contact:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "points", "start",
-                            "end", "friction"});
+                            "end", "friction", "impact"});
       break;
     case TermKind::Clearance:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "point", "start",
@@ -376,6 +376,7 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       if (!(ts.end > ts.start)) r.badValue(Reader::join(path, "end"), t["end"], "a time after 'start'");
       if (t.contains("friction"))
         ts.friction = r.nonNegative(t["friction"], Reader::join(path, "friction"));
+      if (t.contains("impact")) ts.impact = r.boolean(t["impact"], Reader::join(path, "impact"));
       break;
     }
     case TermKind::Clearance:
@@ -626,6 +627,7 @@ json writeTerm(const TermSpec& t) {
       j["start"] = t.start;
       j["end"] = t.end;
       j["friction"] = t.friction;
+      j["impact"] = t.impact;
       break;
     }
     case TermKind::Clearance:

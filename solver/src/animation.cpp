@@ -59,6 +59,11 @@ Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {
         track.term = scene.terms[ct.term].id;
         track.link = model.bodies[ct.points.body].name;
         track.pointIndex = static_cast<int>(p);
+        if (ct.impact()) {
+          track.impact = true;
+          track.impactTime = ct.start;
+          track.impulse = problem.contactImpulses(static_cast<int>(j))[p];
+        }
         ca.contacts.push_back(track);
       }
     }

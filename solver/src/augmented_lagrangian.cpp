@@ -263,6 +263,10 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     }
   }
   m = measure(problem);
+  if (summary.status == SolveStatus::IterationLimit && m.maxViolation <= options.tolerance)
+    summary.reason = "constraints within tolerance, but the augmented Lagrangian was not yet "
+                     "stationary after " + std::to_string(options.maxOuterIterations) +
+                     " multiplier updates (the objective may still improve)";
   summary.objective = m.objective;
   summary.maxViolation = m.maxViolation;
   summary.worstConstraint = m.worstConstraint;

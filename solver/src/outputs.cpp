@@ -67,6 +67,17 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
                        {"max_position_error", f.maxPositionError},
                        {"max_root_lift", f.maxRootLift}});
   val["flights"] = flights;
+  json impacts = json::array();
+  for (const ImpactCheck& i : v.impacts)
+    impacts.push_back({{"contact", i.contact},
+                       {"time", i.time},
+                       {"speed_before", i.speedBefore},
+                       {"min_normal_impulse", i.minNormalImpulse},
+                       {"max_friction_ratio", i.maxFrictionRatio},
+                       {"max_balance_error", i.maxBalanceError},
+                       {"max_speed_after", i.maxSpeedAfter},
+                       {"max_joint_impulse", i.maxJointImpulse}});
+  val["impacts"] = impacts;
   j["validity"] = val;
   return j.dump(2) + "\n";
 }
@@ -122,6 +133,7 @@ std::string motionJson(const Animation& animation) {
       for (const auto& x : t.force) f.push_back(vec3(x));
       jt["point"] = p;
       jt["force"] = f;
+      if (t.impact) jt["impact"] = {{"time", t.impactTime}, {"impulse", vec3(t.impulse)}};
       contacts.push_back(jt);
     }
     jc["contacts"] = contacts;

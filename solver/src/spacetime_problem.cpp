@@ -22,6 +22,12 @@ std::string at(const std::string& what, double t) {
 }
 
 // Times where an interval term is imposed: the samples inside it and its two ends.
+// A contact that begins after the clip's start and asks for an impact (the default).
+bool touchesDownWithImpact(const TermSpec& t, const Scene& scene) {
+  return t.enabled && t.kind == TermKind::Contact && t.impact &&
+         t.start > scene.startTime + kTimeTolerance && t.start < scene.endTime - kTimeTolerance;
+}
+
 std::vector<double> intervalTimes(const Transcription& tr, double a, double b) {
   std::vector<double> times = {a, b};
   for (const Sample& s : tr.samplesIn(a, b))
@@ -69,7 +75,8 @@ std::vector<std::pair<double, double>> SpacetimeProblem::flightPhases(int c) con
   return flights;
 }
 
-GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order) const {
+GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order,
+                                        bool before) const {
   GroupBasis gb;
   gb.count = 4;
   if (!g.hermite) {
@@ -85,8 +92,13 @@ GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int 
   const auto& br = g.breaks;
   int k = static_cast<int>(std::upper_bound(br.begin(), br.end(), t) - br.begin()) - 1;
   k = std::clamp(k, 0, static_cast<int>(br.size()) - 2);
-  // At an interior breakpoint, take the interval on the side that has t's contacts.
-  if (k > 0 && std::abs(t - br[k]) < 1e-9 &&
+  if (before)  // the interval that ends at t: the last one starting before t
+    k = std::clamp(static_cast<int>(std::lower_bound(br.begin(), br.end(), t - kTimeTolerance) -
+                                    br.begin()) - 1,
+                   0, static_cast<int>(br.size()) - 2);
+  // At an interior breakpoint, take the interval on the side that has t's contacts. (An impact
+  // repeats its breakpoint; upper_bound already lands after the repeat, on the contact side.)
+  else if (k > 0 && std::abs(t - br[k]) < 1e-9 &&
       activeContacts(c, 0.5 * (br[k - 1] + br[k])) == activeContacts(c, t) &&
       activeContacts(c, 0.5 * (br[k] + br[k + 1])) != activeContacts(c, t))
     --k;
@@ -107,13 +119,13 @@ GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int 
   return gb;
 }
 
-void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order) {
+void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order, bool before) {
   const CharacterVariables& cv = characters_[c];
   const int row0 = in.newRows(cv.dofs);
   for (const DofGroup& g : cv.groups) {
     const int n = static_cast<int>(g.dofs.size());
     if (n == 0) continue;  // Ceres has no zero-size parameter blocks
-    const GroupBasis gb = groupBasis(c, g, t, order);
+    const GroupBasis gb = groupBasis(c, g, t, order, before);
     for (int i = 0; i < gb.count; ++i) {
       const int blk = in.block(x_.data() + g.offset + gb.block[i] * g.blockSize(), g.blockSize());
       for (int k = 0; k < n; ++k) in.add(row0 + g.dofs[k], blk, gb.part[i] * n + k, gb.weight[i]);
@@ -131,8 +143,22 @@ void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scal
   const ContactVariables& cv = contacts_[j];
   const int size = cv.blockSize();
   const int row0 = in.newRows(size);
-  const int blk = in.block(x_.data() + cv.forceOffset + cv.sampleIndex(t) * size, size);
-  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale);
+  // Forces are linear between the contact's samples: weights of the two neighbours.
+  const int exact = cv.sampleIndex(t);
+  int i = exact;
+  double a = 0;
+  if (exact < 0) {
+    const auto it = std::upper_bound(cv.times.begin(), cv.times.end(), t);
+    i = std::clamp(static_cast<int>(it - cv.times.begin()) - 1, 0,
+                   static_cast<int>(cv.times.size()) - 2);
+    a = (t - cv.times[i]) / (cv.times[i + 1] - cv.times[i]);
+  }
+  const int blk = in.block(x_.data() + cv.forceOffset + i * size, size);
+  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale * (1 - a));
+  if (a != 0) {
+    const int next = in.block(x_.data() + cv.forceOffset + (i + 1) * size, size);
+    for (int d = 0; d < size; ++d) in.add(row0 + d, next, d, scale * a);
+  }
 }
 
 void SpacetimeProblem::addAnchorInputs(InputMap& in, int j) {
@@ -176,6 +202,15 @@ bool SpacetimeProblem::assemble(std::string* error) {
     if (!unactuated.dofs.empty()) {
       unactuated.hermite = true;
       unactuated.breaks = transcription_.breakpoints;
+      // An impact repeats its breakpoint: one velocity before, one after (positions are made
+      // equal by the impact term).
+      for (const TermSpec& t : scene_.terms)
+        if (touchesDownWithImpact(t, scene_) && t.character == spec.id &&
+            std::count_if(unactuated.breaks.begin(), unactuated.breaks.end(),
+                          [&](double b) { return std::abs(b - t.start) < kTimeTolerance; }) == 1)
+          unactuated.breaks.insert(
+              std::lower_bound(unactuated.breaks.begin(), unactuated.breaks.end(), t.start - kTimeTolerance),
+              t.start);
       cv.groups.push_back(unactuated);
     }
     for (DofGroup& g : cv.groups) {
@@ -206,6 +241,10 @@ bool SpacetimeProblem::assemble(std::string* error) {
     size += cv.blockSize() * static_cast<int>(cv.times.size());
     cv.anchorOffset = size;
     size += 2 * static_cast<int>(t.points.size());
+    if (touchesDownWithImpact(t, scene_) && ch.groups.size() > 1) {
+      cv.impulseOffset = size;
+      size += cv.blockSize();
+    }
     contacts_.push_back(cv);
   }
   x_.assign(size, 0.0);
@@ -344,8 +383,51 @@ bool SpacetimeProblem::assemble(std::string* error) {
                                                        1.0 / cv.weight, at(label + " cone", time)),
                   in);
     }
+    if (ct.impact()) addImpactTerms(jj);
   }
   return addFormulaTerms(error);
+}
+
+void SpacetimeProblem::addImpactTerms(int j) {
+  const ContactVariables& ct = contacts_[j];
+  const CharacterVariables& cv = characters_[ct.character];
+  const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
+  const double t = ct.start;
+  // Impulses are measured as the weight acting over one knot interval, and an impulsive joint
+  // torque costs what the same torque impulse spread over one knot interval would cost in the
+  // effort integral (tau^2 h = (impulse / h)^2 h).
+  const double h = transcription_.motion.knotSpacing();
+  const double impulseScale = 1.0 / (cv.weight * h);
+  InputMap in;
+  addMotionInputs(in, ct.character, t, 0, /*before=*/true);
+  addMotionInputs(in, ct.character, t, 0);
+  addMotionInputs(in, ct.character, t, 1, /*before=*/true);
+  addMotionInputs(in, ct.character, t, 1);
+  const int row0 = in.newRows(ct.blockSize());
+  const int blk = in.block(x_.data() + ct.impulseOffset, ct.blockSize());
+  for (int d = 0; d < ct.blockSize(); ++d) in.add(row0 + d, blk, d, 1.0);
+  addResidual(std::make_shared<ImpactKernel>(cv.model, ct.points, ct.forceDims, impulseScale,
+                                             scene_.objective.effort / h, at(label + " impact", t)),
+              in);
+  InputMap imp;
+  const int r0 = imp.newRows(ct.blockSize());
+  const int b0 = imp.block(x_.data() + ct.impulseOffset, ct.blockSize());
+  for (int d = 0; d < ct.blockSize(); ++d) imp.add(r0 + d, b0, d, 1.0);
+  const int points = static_cast<int>(ct.points.points.size());
+  addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction, impulseScale,
+                                                   at(label + " impulse cone", t)),
+              imp);
+  // As for the forces: several points on one body share an impulse indeterminately; a small
+  // minimum-norm term picks the even split.
+  if (scene_.objective.contactForce > 0) {
+    InputMap share;
+    const int r1 = share.newRows(ct.blockSize());
+    const int b1 = share.block(x_.data() + ct.impulseOffset, ct.blockSize());
+    for (int d = 0; d < ct.blockSize(); ++d) share.add(r1 + d, b1, d, impulseScale);
+    addResidual(std::make_shared<WeightedValueKernel>(ct.blockSize(), scene_.objective.contactForce * h,
+                                                      at(label + " impulse sharing", t)),
+                share);
+  }
 }
 
 std::vector<int> SpacetimeProblem::addSampleInputs(InputMap& in, int c, double t) {
@@ -518,14 +600,34 @@ void SpacetimeProblem::initialGuess() {
 }
 
 Eigen::VectorXd SpacetimeProblem::jointState(int c, double t, int order) const {
+  return jointStateOnSide(c, t, order, /*before=*/false);
+}
+
+Eigen::VectorXd SpacetimeProblem::jointStateOnSide(int c, double t, int order, bool before) const {
   const CharacterVariables& cv = characters_[c];
   Eigen::VectorXd out = Eigen::VectorXd::Zero(cv.dofs);
   for (const DofGroup& g : cv.groups) {
     const int n = static_cast<int>(g.dofs.size());
-    const GroupBasis gb = groupBasis(c, g, t, order);
+    const GroupBasis gb = groupBasis(c, g, t, order, before);
     for (int i = 0; i < gb.count; ++i)
       for (int k = 0; k < n; ++k)
         out[g.dofs[k]] += gb.weight[i] * x_[g.offset + gb.block[i] * g.blockSize() + gb.part[i] * n + k];
+  }
+  return out;
+}
+
+Eigen::VectorXd SpacetimeProblem::jointStateBefore(int c, double t, int order) const {
+  return jointStateOnSide(c, t, order, /*before=*/true);
+}
+
+std::vector<Eigen::Vector3d> SpacetimeProblem::contactImpulses(int j) const {
+  const ContactVariables& ct = contacts_[j];
+  std::vector<Eigen::Vector3d> out;
+  if (!ct.impact()) return out;
+  for (size_t p = 0; p < ct.points.points.size(); ++p) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    for (int k = 0; k < ct.forceDims; ++k) v[k] = x_[ct.impulseOffset + p * ct.forceDims + k];
+    out.push_back(v);
   }
   return out;
 }
@@ -547,6 +649,76 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
       out[p][k] = (1 - a) * x_[ct.forceOffset + i * ct.blockSize() + p * ct.forceDims + k] +
                   a * x_[ct.forceOffset + i1 * ct.blockSize() + p * ct.forceDims + k];
   return out;
+}
+
+int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
+  int matched = 0;
+  const UniformBSpline& spline = transcription_.motion;
+  const double t0 = std::max(spline.start(), previous.scene().startTime);
+  const double t1 = std::min(spline.end(), previous.scene().endTime);
+  auto clampTime = [&](double t) { return std::clamp(t, t0, t1); };
+  for (size_t c = 0; c < characters_.size(); ++c) {
+    const std::string& id = scene_.characters[c].id;
+    const auto it = std::find_if(previous.scene().characters.begin(), previous.scene().characters.end(),
+                                 [&](const CharacterSpec& s) { return s.id == id; });
+    if (it == previous.scene().characters.end()) continue;
+    const int pc = static_cast<int>(it - previous.scene().characters.begin());
+    const CharacterVariables& cv = characters_[c];
+    if (previous.characters()[pc].dofs != cv.dofs) continue;  // a different body tree
+    ++matched;
+    for (const DofGroup& g : cv.groups) {
+      const int n = static_cast<int>(g.dofs.size());
+      if (n == 0) continue;
+      if (!g.hermite) {
+        std::vector<double> times;
+        const int samples = 8 * spline.segmentCount();
+        for (int i = 0; i <= samples; ++i) times.push_back(spline.start() + (spline.end() - spline.start()) * i / samples);
+        Eigen::MatrixXd values(times.size(), n);
+        for (size_t i = 0; i < times.size(); ++i) {
+          const Eigen::VectorXd q = previous.jointState(pc, clampTime(times[i]), 0);
+          for (int k = 0; k < n; ++k) values(i, k) = q[g.dofs[k]];
+        }
+        const Eigen::MatrixXd ctrl = spline.fit(times, values);
+        for (int k = 0; k < ctrl.rows(); ++k)
+          for (int d = 0; d < n; ++d) x_[g.offset + k * n + d] = ctrl(k, d);
+        continue;
+      }
+      for (size_t k = 0; k < g.breaks.size(); ++k) {
+        // The first of a repeated breakpoint is the state before an impact.
+        const bool before = k + 1 < g.breaks.size() && std::abs(g.breaks[k + 1] - g.breaks[k]) < kTimeTolerance;
+        const double t = clampTime(g.breaks[k]);
+        const Eigen::VectorXd q = before ? previous.jointStateBefore(pc, t, 0) : previous.jointState(pc, t, 0);
+        const Eigen::VectorXd v = before ? previous.jointStateBefore(pc, t, 1) : previous.jointState(pc, t, 1);
+        for (int d = 0; d < n; ++d) {
+          x_[g.offset + k * 2 * n + d] = q[g.dofs[d]];
+          x_[g.offset + k * 2 * n + n + d] = v[g.dofs[d]];
+        }
+      }
+    }
+  }
+  for (ContactVariables& ct : contacts_) {
+    const std::string& id = scene_.terms[ct.term].id;
+    for (size_t j = 0; j < previous.contacts().size(); ++j) {
+      const ContactVariables& old = previous.contacts()[j];
+      if (previous.scene().terms[old.term].id != id || old.blockSize() != ct.blockSize()) continue;
+      for (size_t i = 0; i < ct.times.size(); ++i) {
+        // Forces at the old interval's matching instant (the interval may have moved).
+        const double u = (ct.times[i] - ct.start) / (ct.end - ct.start);
+        const std::vector<Eigen::Vector3d> f =
+            previous.contactForces(static_cast<int>(j), old.start + u * (old.end - old.start));
+        for (size_t p = 0; p < f.size(); ++p)
+          for (int k = 0; k < ct.forceDims; ++k) x_[ct.forceOffset + i * ct.blockSize() + p * ct.forceDims + k] = f[p][k];
+      }
+      for (size_t a = 0; a < 2 * ct.points.points.size(); ++a) x_[ct.anchorOffset + a] = previous.variables()[old.anchorOffset + a];
+      if (ct.impact() && old.impact())
+        for (int k = 0; k < ct.blockSize(); ++k) x_[ct.impulseOffset + k] = previous.variables()[old.impulseOffset + k];
+    }
+  }
+  // Multipliers do not transfer (their rows differ), but the penalty does: it keeps the next
+  // solve near the transferred motion instead of first relaxing the constraints.
+  std::fill(al_.lambda.begin(), al_.lambda.end(), 0.0);
+  if (matched > 0) al_.rho = std::max(al_.rho, previous.al_.rho);
+  return matched;
 }
 
 bool SpacetimeProblem::restore(const SolutionState& s) {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "dynamics/algorithms.h"
+#include "dynamics/contact_points.h"
 #include "solver/animation.h"
 
 namespace spacetime {
@@ -50,6 +51,52 @@ double forwardSimulationError(const SpacetimeProblem& problem, int c, double t0,
     worst = std::max(worst, (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff());
   }
   return worst;
+}
+
+ImpactCheck checkImpact(const SpacetimeProblem& problem, int j) {
+  const ContactVariables& ct = problem.contacts()[j];
+  const CharacterVariables& cv = problem.characters()[ct.character];
+  const Model<double>& model = *cv.model;
+  const int n = model.dofCount();
+  ImpactCheck ic;
+  ic.contact = problem.scene().terms[ct.term].id;
+  ic.time = ct.start;
+  const Eigen::VectorXd q = problem.jointStateBefore(ct.character, ct.start, 0);
+  const Eigen::VectorXd before = problem.jointStateBefore(ct.character, ct.start, 1);
+  const Eigen::VectorXd after = problem.jointState(ct.character, ct.start, 1);
+  Data<double> data(model);
+  const Eigen::MatrixXd M = crba(model, data, q.data());
+  Eigen::VectorXd balance = M * (after - before);
+  // J^T L: the generalized force of the points' impulses is the RNEA of those point forces
+  // alone (no motion, no gravity), with the opposite sign.
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+  balance += rnea(model, data, q.data(), zero.data(), zero.data(),
+                  contactPointForces(std::vector<ContactPoints>{ct.points},
+                                     problem.variables().data() + ct.impulseOffset, ct.forceDims),
+                  false);
+  const std::vector<Eigen::Vector3d> impulses = problem.contactImpulses(j);
+  ic.minNormalImpulse = 1e300;
+  for (const Eigen::Vector3d& l : impulses) {
+    ic.minNormalImpulse = std::min(ic.minNormalImpulse, l.y());
+    if (l.y() > 0)
+      ic.maxFrictionRatio = std::max(ic.maxFrictionRatio, std::hypot(l.x(), l.z()) / (ct.friction * l.y()));
+  }
+  for (int d = 0; d < n; ++d) {
+    if (model.bodies[model.dofBody[d]].actuated)
+      ic.maxJointImpulse = std::max(ic.maxJointImpulse, std::abs(balance[d]));
+    else
+      ic.maxBalanceError = std::max(ic.maxBalanceError, std::abs(balance[d]));
+  }
+  auto fastestPoint = [&](const Eigen::VectorXd& qd) {
+    forwardKinematics(model, data, q.data(), qd.data(), static_cast<const double*>(nullptr));
+    double fastest = 0;
+    for (const Eigen::Vector3d& p : ct.points.points)
+      fastest = std::max(fastest, pointVelocity(data, ct.points.body, p).norm());
+    return fastest;
+  };
+  ic.speedBefore = fastestPoint(before);
+  ic.maxSpeedAfter = fastestPoint(after);
+  return ic;
 }
 
 }  // namespace
@@ -142,6 +189,18 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
           r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));
       }
     }
+  }
+  for (size_t j = 0; j < problem.contacts().size(); ++j) {
+    const ContactVariables& ct = problem.contacts()[j];
+    if (!ct.impact()) continue;
+    const CharacterVariables& cv = problem.characters()[ct.character];
+    r.impacts.push_back(checkImpact(problem, static_cast<int>(j)));
+    const ImpactCheck& i = r.impacts.back();
+    // The impulse tolerance: the solver's, on the weight acting over one knot interval.
+    const double scale = cv.weight * problem.transcription().motion.knotSpacing();
+    if (i.minNormalImpulse < -1e-6 * scale) r.contactsPushOnly = false;
+    for (const Eigen::Vector3d& l : problem.contactImpulses(static_cast<int>(j)))
+      r.maxConeViolation = std::max(r.maxConeViolation, (std::hypot(l.x(), l.z()) - ct.friction * l.y()) / scale);
   }
   r.contactsInFrictionCone = r.maxConeViolation <= 1e-6;  // fraction of weight, as above
   // Flight phases of every character that has contacts.

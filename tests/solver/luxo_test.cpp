@@ -3,6 +3,8 @@
 // friction cone) checked on the solved motion.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
@@ -65,6 +67,19 @@ TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
   EXPECT_TRUE(v.contactsInFrictionCone);
   EXPECT_LT(v.maxContactSlip, 1e-6);
   EXPECT_LT(v.maxClearanceViolation, 1e-3);
+  // The landing is an impact, checked with CRBA (not the RNEA the solver differentiates): the
+  // base arrives moving, the ground's impulse alone stops it (M dqd = J^T L on the root rows),
+  // pushes and stays in the friction cone, and the base is at rest right after.
+  ASSERT_EQ(v.impacts.size(), 1u);
+  const ImpactCheck& landing = v.impacts[0];
+  EXPECT_EQ(landing.contact, "landing");
+  EXPECT_GT(landing.speedBefore, 0.1);
+  EXPECT_GT(landing.minNormalImpulse, 0.0);
+  EXPECT_LE(landing.maxFrictionRatio, 1.0 + 1e-6);
+  EXPECT_LT(landing.maxBalanceError, 1e-6);
+  EXPECT_LT(landing.maxSpeedAfter, 1e-6);
+  std::printf("landing: %.3f m/s before, normal impulse >= %.3f N s, joint impulse %.4f N m s\n",
+              landing.speedBefore, landing.minNormalImpulse, landing.maxJointImpulse);
 }
 
 // Doubling the base's mass must change the motion visibly, not only the torques.

@@ -89,6 +89,33 @@ TEST_P(Particle, FormulaTermsReachTheSameOptimum) {
   EXPECT_NEAR(s.objective / analyticParticleMinimum(shipped), 1.0, 1e-6);
 }
 
+// A solution carries over to a problem of another shape (here a transcription twice as fine):
+// re-fitted, it starts the finer solve at the old optimum, which the finer spline space also
+// contains, so the solve needs fewer iterations than from the default guess and ends at the
+// same analytic minimum.
+TEST(ParticleWarmStart, CarriesOverToAFinerTranscription) {
+  const Scene coarse = testing::shippedScene("particle_gravity.json");
+  SolverSummary s;
+  const auto solved = solveTightly(coarse, &s);
+  Scene fine = coarse;
+  fine.transcription.controlPointsPerSecond *= 2;
+  SolverSummary cold;
+  solveTightly(fine, &cold);
+  std::string error;
+  auto problem = SpacetimeProblem::build(fine, &error);
+  ASSERT_TRUE(problem) << error;
+  ASSERT_NE(problem->state().variables.size(), solved->state().variables.size());
+  EXPECT_EQ(problem->initializeFrom(*solved), 1);
+  SolverOptions options;
+  options.tolerance = 1e-10;
+  options.warmStart = true;
+  const SolverSummary warm = solveSpacetime(*problem, options);
+  EXPECT_TRUE(warm.converged) << warm.reason;
+  EXPECT_NEAR(warm.objective / analyticParticleMinimum(coarse), 1.0, 1e-6);
+  EXPECT_LT(warm.iterations, cold.iterations);
+  std::printf("finer transcription: %d iterations warm, %d from the default guess\n", warm.iterations, cold.iterations);
+}
+
 TEST(ParticleFormula, BadFormulaFailsTheBuildWithItsColumn) {
   Scene scene = testing::shippedScene("particle.json");
   TermSpec f;

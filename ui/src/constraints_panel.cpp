@@ -215,6 +215,10 @@ void ConstraintsPanel::termForm(const std::string& id) {
       timeRow(tr("End"), &TermSpec::end);
       form_->addDouble(tr("Friction μ"), [get](const Scene& s) { return get(s).friction; },
                        [edit](Scene& s, double v) { edit(s, [&](TermSpec& t) { t.friction = v; }); }, 0, 10, 0.05, 2);
+      // Touch-down with an impact (root velocity jump, ground impulse) when the contact begins
+      // after the clip's start; off, the points must already be at rest when it begins.
+      form_->addBool(tr("Impact at start"), [get](const Scene& s) { return get(s).impact; },
+                     [edit](Scene& s, bool v) { edit(s, [&](TermSpec& t) { t.impact = v; }); });
       for (size_t k = 0; k < term.points.size(); ++k)
         form_->addVector(tr("Point %1").arg(k + 1),
                          [get, k](const Scene& s) { return k < get(s).points.size() ? get(s).points[k] : Eigen::Vector3d::Zero().eval(); },

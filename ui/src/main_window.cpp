@@ -250,8 +250,12 @@ bool MainWindow::saveFile(const QString& path, QString* error) {
 
 void MainWindow::solve() {
   std::optional<SolutionState> warm;
-  if (doc_.motion()) warm = doc_.motion()->state;
-  job_.start(doc_.scene(), warm);
+  std::shared_ptr<const Scene> warmScene;
+  if (doc_.motion()) {
+    warm = doc_.motion()->state;
+    warmScene = doc_.motion()->scene;
+  }
+  job_.start(doc_.scene(), warm, warmScene);
   solveAction_->setEnabled(false);
   stopAction_->setEnabled(true);
   progress_->setText(tr("Solving…"));

@@ -8,6 +8,7 @@ std::shared_ptr<SolvedMotion> sampleMotion(const SpacetimeProblem& problem) {
   auto m = std::make_shared<SolvedMotion>();
   m->animation = sampleAnimation(problem, kDisplayRateHz);
   m->state = problem.state();
+  m->scene = std::make_shared<const Scene>(problem.scene());
   return m;
 }
 

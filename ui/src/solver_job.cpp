@@ -53,7 +53,8 @@ bool SolverJob::waitForFinished(int timeoutMs) {
   return true;
 }
 
-void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmStart) {
+void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmStart,
+                      std::shared_ptr<const Scene> warmScene) {
   if (current_) {
     current_->cancel = true;
     current_->thread.detach();  // it ends on its own; its results carry an old generation
@@ -65,7 +66,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   ++alive_;
   QPointer<SolverJob> self(this);
   const int threadCount = threads;
-  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, threadCount]() {
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount]() {
     // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
     // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
     // Linux applies nice values per thread.
@@ -92,6 +93,12 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       SolverOptions options = solverOptionsFor(scene.solver);
       options.threads = threadCount;
       options.warmStart = warmStart && problem->restore(*warmStart);
+      if (warmStart && !options.warmStart && warmScene) {
+        std::string ignored;
+        std::unique_ptr<SpacetimeProblem> previous = SpacetimeProblem::build(*warmScene, &ignored);
+        if (previous && previous->restore(*warmStart))
+          options.warmStart = problem->initializeFrom(*previous) > 0;
+      }
       {
         auto first = sampleMotion(*problem);
         const ProblemMeasures m = measure(*problem);

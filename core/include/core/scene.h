@@ -88,6 +88,9 @@ struct TermSpec {
   std::vector<Eigen::Vector3d> points;                 // contact: body-frame points
   double start = 0, end = 0;                           // contact, clearance interval
   double friction = 1.0;                               // contact: Coulomb coefficient mu
+  // contact beginning after the clip's start: the points touch down with an impact (a
+  // velocity jump of the root, with a ground impulse) rather than already at rest
+  bool impact = true;
   double height = 0;                                   // clearance: minimum world y
   bool box = false;  // clearance: stay outside the axis-aligned box [boxMin, boxMax] instead
   Eigen::Vector3d boxMin = Eigen::Vector3d::Zero(), boxMax = Eigen::Vector3d::Zero();

@@ -17,6 +17,10 @@ struct ContactTrack {
   std::string link;   // body id
   int pointIndex = 0;
   std::vector<Eigen::Vector3d> position, force;  // world, one per frame
+  // A contact that touches down with an impact: the instant and the point's world impulse (N s).
+  bool impact = false;
+  double impactTime = 0;
+  Eigen::Vector3d impulse = Eigen::Vector3d::Zero();
 };
 
 struct CharacterAnimation {

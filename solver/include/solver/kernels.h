@@ -161,6 +161,34 @@ class FrictionConeKernel : public Kernel {
   double mu_, scale_;
 };
 
+// A contact that begins in flight: a rigid impact at the touch-down instant (Featherstone RBDA
+// section 11.6; Witkin & Kass' spacetime with an instantaneous collision). Velocities jump, the
+// configuration does not: M(q) (qd+ - qd-) = J(q)^T L, with L the ground impulse of the contact
+// points, and the contact points are at rest just after. z = [q-, q+, qd-, qd+, L] (L: forceDims
+// per point, world axes). Rows: q+ - q- for the unactuated dofs (equalities: the root does not
+// teleport); the unactuated rows of M (qd+ - qd-) - J^T L times impulseScale (equalities: the
+// impulse alone stops the root); the actuated rows - the impulsive joint torques that keep the
+// joints' velocities continuous (the joints' splines are C2) - times sqrt(torqueWeight)
+// (objective); the contact points' velocities after the jump (equalities, forceDims per point).
+class ImpactKernel : public Kernel {
+ public:
+  ImpactKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
+               int forceDims, double impulseScale, double torqueWeight, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+  // The rows' parts: root continuity, root impulse balance, impulsive joint torques, and the
+  // contact points' velocity after the impact.
+  enum class Part { Continuity, Balance, JointImpulse, PostVelocity };
+  Part part(int row) const { return parts_[row]; }
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  ContactPoints contact_;
+  int forceDims_;
+  double impulseScale_, sqrtTorqueWeight_;
+  std::vector<int> unactuated_, actuated_;
+  std::vector<Part> parts_;
+};
+
 // A body point stays at or above a height (height - p_y <= 0), or outside an axis-aligned box:
 // -max(p - boxMax, boxMin - p) <= 0, i.e. beyond at least one face (the active face's row is
 // differentiated; the set outside a box is not convex, so this is a local condition). z = q.

@@ -77,6 +77,11 @@ struct ContactVariables {
   int forceDims = 3;
   int forceOffset = 0;   // sample i at + i * blockSize()
   int anchorOffset = 0;  // 2 values (x, z) per point
+  // A contact that begins after the clip's start on a floating character touches down with an
+  // impact: the root's velocity jumps at `start` (its Hermite data has two breakpoints there)
+  // and the points receive a ground impulse (blockSize() values, N s, world axes).
+  int impulseOffset = -1;  // -1: no impact
+  bool impact() const { return impulseOffset >= 0; }
   int blockSize() const { return forceDims * static_cast<int>(points.points.size()); }
   int sampleIndex(double t) const;  // -1 if t is not one of `times`
 };
@@ -106,8 +111,12 @@ class SpacetimeProblem {
 
   // q, qd, qdd (order 0, 1, 2) of a character at time t.
   Eigen::VectorXd jointState(int character, double t, int order) const;
+  // q, qd of a character just before t: differs from jointState at an impact.
+  Eigen::VectorXd jointStateBefore(int character, double t, int order) const;
   // World force of each point of a contact at time t (zero outside its interval).
   std::vector<Eigen::Vector3d> contactForces(int contact, double t) const;
+  // World impulse of each point of a contact at its touch-down (empty without an impact).
+  std::vector<Eigen::Vector3d> contactImpulses(int contact) const;
 
   // Index of the character with this id (0 if none: ids are validated by the loader).
   int characterIndex(const std::string& id) const;
@@ -116,6 +125,14 @@ class SpacetimeProblem {
   // The maximal intervals of the clip in which character c touches nothing: the whole clip for
   // a character without contacts.
   std::vector<std::pair<double, double>> flightPhases(int character) const;
+
+  // Starts from another problem's solution when the shapes differ (a finer transcription, a
+  // moved contact edge, an added term): each character's motion (matched by id) is re-fitted -
+  // joint splines by least squares on a dense grid, root Hermite data read off the old motion -
+  // and each contact's forces, anchors and impulse (matched by term id) are resampled. What has
+  // no counterpart keeps this problem's default guess; multipliers start at zero and the
+  // penalty at the previous one's. Returns the number of characters matched.
+  int initializeFrom(const SpacetimeProblem& previous);
 
   SolutionState state() const { return {x_, al_.lambda, al_.rho}; }
   // Restores a state of the same problem shape; false if the shapes differ.
@@ -128,12 +145,16 @@ class SpacetimeProblem {
   void addResidual(std::shared_ptr<const Kernel> kernel, const InputMap& inputs);
   // Input map helpers: append z rows for a character's q^(order)(t), a contact's forces at t,
   // the anchors.
-  void addMotionInputs(InputMap& in, int character, double t, int order);
+  void addMotionInputs(InputMap& in, int character, double t, int order, bool before = false);
   void addForceInputs(InputMap& in, int contact, double t, double scale = 1.0);
   void addAnchorInputs(InputMap& in, int contact);
   // The basis of a group at t. At a Hermite breakpoint the interval whose contacts are those
-  // active at t is used (the instant a contact ends belongs to the contact phase).
-  GroupBasis groupBasis(int character, const DofGroup& g, double t, int order) const;
+  // active at t is used (the instant a contact ends belongs to the contact phase); with
+  // `before`, the interval that ends at t (the state just before an impact).
+  GroupBasis groupBasis(int character, const DofGroup& g, double t, int order,
+                        bool before = false) const;
+  void addImpactTerms(int contact);
+  Eigen::VectorXd jointStateOnSide(int character, double t, int order, bool before) const;
   // Inputs of a sample (q, qd, qdd, active contacts' forces) and the active contacts.
   std::vector<int> addSampleInputs(InputMap& in, int character, double t);
   // A formula of character c compiled for the given active contacts (cached); null and an

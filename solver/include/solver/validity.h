@@ -5,7 +5,8 @@
 // the largest unactuated generalized force (as a fraction of the character's weight), pin
 // errors, contact slip and penetration, contact forces' sign and friction, clearance, rest at
 // the rest terms, and - the independent check - the error of forward-simulating the solved
-// actuated torques with the articulated-body algorithm over each flight phase.
+// actuated torques with the articulated-body algorithm over each flight phase, and the impulse
+// balance of every touch-down.
 #pragma once
 
 #include <string>
@@ -22,6 +23,19 @@ struct FlightCheck {
   double maxRootLift = 0;       // highest the lowest contact point of the root rises (m)
 };
 
+// A touch-down with an impact, checked with the CRBA mass matrix and the contact Jacobian
+// (independent of the RNEA the solver differentiates): M (qd+ - qd-) = J^T L on the root rows.
+struct ImpactCheck {
+  std::string contact;
+  double time = 0;
+  double speedBefore = 0;       // fastest contact point just before (m/s)
+  double minNormalImpulse = 0;  // N s (negative would mean the ground pulls)
+  double maxFrictionRatio = 0;  // |L_t| / (mu L_n)
+  double maxBalanceError = 0;   // root rows of M dqd - J^T L, N s
+  double maxSpeedAfter = 0;     // fastest contact point just after (m/s)
+  double maxJointImpulse = 0;   // largest impulsive joint torque, N m s
+};
+
 struct ValidityReport {
   int denseFactor = 10;
   double maxUnactuatedResidualSamples = 0;  // fraction of weight, at the collocation samples
@@ -36,6 +50,7 @@ struct ValidityReport {
   double maxClearanceViolation = 0;         // m
   double maxRestSpeed = 0;                  // largest |qd| at the rest terms
   std::vector<FlightCheck> flights;
+  std::vector<ImpactCheck> impacts;
   double maxForwardSimulationError = 0;
   bool contactsPushOnly = true;
   bool contactsInFrictionCone = true;

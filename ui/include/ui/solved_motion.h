@@ -16,6 +16,9 @@ inline constexpr double kDisplayRateHz = 120;  // frames per second of the sampl
 struct SolvedMotion {
   Animation animation;  // sampled at kDisplayRateHz
   SolutionState state;  // the problem's variables and multipliers
+  // The scene `state` belongs to: after an edit that changes the problem's shape, the next
+  // solve re-fits this motion instead of starting from the default guess.
+  std::shared_ptr<const Scene> scene;
   double objective = 0;
   double maxViolation = 0;
   int iterations = 0;

@@ -26,7 +26,10 @@ class SolverJob : public QObject {
 
   // Solves `scene` from `warmStart` if it fits the problem (else from the default initial
   // guess). The scene is validated as a file would be; an invalid one ends in failed().
-  void start(const Scene& scene, std::optional<SolutionState> warmStart = std::nullopt);
+  // Warm start: `warmStart` is restored when the problem has its shape; otherwise, with the
+  // scene it was solved for, its motion is re-fitted (SpacetimeProblem::initializeFrom).
+  void start(const Scene& scene, std::optional<SolutionState> warmStart = std::nullopt,
+             std::shared_ptr<const Scene> warmScene = nullptr);
   void cancel();
   bool isRunning() const { return running_ > 0; }
   // Blocks (processing events) until no solve runs; false on timeout.
