@@ -21,13 +21,13 @@ std::string at(const std::string& what, double t) {
   return s.str();
 }
 
-// Times where an interval term is imposed: the samples inside it and its two ends.
 // A contact that begins after the clip's start and asks for an impact (the default).
 bool touchesDownWithImpact(const TermSpec& t, const Scene& scene) {
   return t.enabled && t.kind == TermKind::Contact && t.impact &&
          t.start > scene.startTime + kTimeTolerance && t.start < scene.endTime - kTimeTolerance;
 }
 
+// Times where an interval term is imposed: the samples inside it and its two ends.
 std::vector<double> intervalTimes(const Transcription& tr, double a, double b) {
   std::vector<double> times = {a, b};
   for (const Sample& s : tr.samplesIn(a, b))
@@ -139,20 +139,21 @@ int ContactVariables::sampleIndex(double t) const {
   return -1;
 }
 
+std::pair<int, double> ContactVariables::interpolation(double t) const {
+  if (times.size() < 2) return {0, 0.0};
+  if (const int exact = sampleIndex(t); exact >= 0) return {exact, 0.0};
+  const int i = std::clamp(static_cast<int>(std::upper_bound(times.begin(), times.end(), t) - times.begin()) - 1,
+                           0, static_cast<int>(times.size()) - 2);
+  return {i, std::clamp((t - times[i]) / (times[i + 1] - times[i]), 0.0, 1.0)};
+}
+
 void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scale) {
   const ContactVariables& cv = contacts_[j];
   const int size = cv.blockSize();
   const int row0 = in.newRows(size);
-  // Forces are linear between the contact's samples: weights of the two neighbours.
-  const int exact = cv.sampleIndex(t);
-  int i = exact;
-  double a = 0;
-  if (exact < 0) {
-    const auto it = std::upper_bound(cv.times.begin(), cv.times.end(), t);
-    i = std::clamp(static_cast<int>(it - cv.times.begin()) - 1, 0,
-                   static_cast<int>(cv.times.size()) - 2);
-    a = (t - cv.times[i]) / (cv.times[i + 1] - cv.times[i]);
-  }
+  // Forces are linear between the contact's samples; terms imposed between samples (a formula
+  // constraint at any instant of a contact) read the two neighbours.
+  const auto [i, a] = cv.interpolation(t);
   const int blk = in.block(x_.data() + cv.forceOffset + i * size, size);
   for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale * (1 - a));
   if (a != 0) {
@@ -161,12 +162,14 @@ void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scal
   }
 }
 
-void SpacetimeProblem::addAnchorInputs(InputMap& in, int j) {
-  const ContactVariables& cv = contacts_[j];
-  const int size = 2 * static_cast<int>(cv.points.points.size());
+void SpacetimeProblem::addBlockInputs(InputMap& in, int offset, int size, double scale) {
   const int row0 = in.newRows(size);
-  const int blk = in.block(x_.data() + cv.anchorOffset, size);
-  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, 1.0);
+  const int blk = in.block(x_.data() + offset, size);
+  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale);
+}
+
+void SpacetimeProblem::addAnchorInputs(InputMap& in, int j) {
+  addBlockInputs(in, contacts_[j].anchorOffset, 2 * static_cast<int>(contacts_[j].points.points.size()));
 }
 
 void SpacetimeProblem::addResidual(std::shared_ptr<const Kernel> kernel, const InputMap& inputs) {
@@ -403,16 +406,12 @@ void SpacetimeProblem::addImpactTerms(int j) {
   addMotionInputs(in, ct.character, t, 0);
   addMotionInputs(in, ct.character, t, 1, /*before=*/true);
   addMotionInputs(in, ct.character, t, 1);
-  const int row0 = in.newRows(ct.blockSize());
-  const int blk = in.block(x_.data() + ct.impulseOffset, ct.blockSize());
-  for (int d = 0; d < ct.blockSize(); ++d) in.add(row0 + d, blk, d, 1.0);
+  addBlockInputs(in, ct.impulseOffset, ct.blockSize());
   addResidual(std::make_shared<ImpactKernel>(cv.model, ct.points, ct.forceDims, impulseScale,
                                              scene_.objective.effort / h, at(label + " impact", t)),
               in);
   InputMap imp;
-  const int r0 = imp.newRows(ct.blockSize());
-  const int b0 = imp.block(x_.data() + ct.impulseOffset, ct.blockSize());
-  for (int d = 0; d < ct.blockSize(); ++d) imp.add(r0 + d, b0, d, 1.0);
+  addBlockInputs(imp, ct.impulseOffset, ct.blockSize());
   const int points = static_cast<int>(ct.points.points.size());
   addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction, impulseScale,
                                                    at(label + " impulse cone", t)),
@@ -421,9 +420,7 @@ void SpacetimeProblem::addImpactTerms(int j) {
   // minimum-norm term picks the even split.
   if (scene_.objective.contactForce > 0) {
     InputMap share;
-    const int r1 = share.newRows(ct.blockSize());
-    const int b1 = share.block(x_.data() + ct.impulseOffset, ct.blockSize());
-    for (int d = 0; d < ct.blockSize(); ++d) share.add(r1 + d, b1, d, impulseScale);
+    addBlockInputs(share, ct.impulseOffset, ct.blockSize(), impulseScale);
     addResidual(std::make_shared<WeightedValueKernel>(ct.blockSize(), scene_.objective.contactForce * h,
                                                       at(label + " impulse sharing", t)),
                 share);
@@ -639,11 +636,8 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
   if (ct.times.empty() || t < ct.times.front() - kTimeTolerance || t > ct.times.back() + kTimeTolerance)
     return out;
   // Linear interpolation between the samples around t.
-  size_t i = 0;
-  while (i + 2 < ct.times.size() && t > ct.times[i + 1]) ++i;
-  const double span = ct.times.size() > 1 ? ct.times[i + 1] - ct.times[i] : 1.0;
-  const double a = ct.times.size() > 1 ? std::clamp((t - ct.times[i]) / span, 0.0, 1.0) : 0.0;
-  const size_t i1 = std::min(i + 1, ct.times.size() - 1);
+  const auto [i, a] = ct.interpolation(t);
+  const size_t i1 = std::min<size_t>(i + 1, ct.times.size() - 1);
   for (int p = 0; p < points; ++p)
     for (int k = 0; k < ct.forceDims; ++k)
       out[p][k] = (1 - a) * x_[ct.forceOffset + i * ct.blockSize() + p * ct.forceDims + k] +

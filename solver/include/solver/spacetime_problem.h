@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/scene.h"
@@ -84,6 +85,9 @@ struct ContactVariables {
   bool impact() const { return impulseOffset >= 0; }
   int blockSize() const { return forceDims * static_cast<int>(points.points.size()); }
   int sampleIndex(double t) const;  // -1 if t is not one of `times`
+  // The sample at or before t and the weight of the next one (forces are linear between
+  // samples; t is clamped to the samples' span).
+  std::pair<int, double> interpolation(double t) const;
 };
 
 // What a solve produces and what warm-starts the next one.
@@ -148,6 +152,8 @@ class SpacetimeProblem {
   void addMotionInputs(InputMap& in, int character, double t, int order, bool before = false);
   void addForceInputs(InputMap& in, int contact, double t, double scale = 1.0);
   void addAnchorInputs(InputMap& in, int contact);
+  // z rows equal to (scale times) the variables x[offset .. offset + size).
+  void addBlockInputs(InputMap& in, int offset, int size, double scale = 1.0);
   // The basis of a group at t. At a Hermite breakpoint the interval whose contacts are those
   // active at t is used (the instant a contact ends belongs to the contact phase); with
   // `before`, the interval that ends at t (the state just before an impact).
