@@ -464,7 +464,8 @@ Scene readScene(const Reader& r, const json& root) {
           r.positive(t["controlPointsPerSecond"], "transcription.controlPointsPerSecond");
     if (t.contains("samplesPerSegment"))
       s.transcription.samplesPerSegment =
-          r.integer(t["samplesPerSegment"], "transcription.samplesPerSegment", 1, 16);
+          r.integer(t["samplesPerSegment"], "transcription.samplesPerSegment", 1,
+                    TranscriptionSpec::kMaxSamplesPerSegment);
   }
   if (root.contains("solver")) {
     const json& t = root["solver"];

@@ -7,6 +7,7 @@
 
 #include "core/atomic_file.h"
 #include "dynamics/urdf_export.h"
+#include "solver/bvh_export.h"
 
 namespace spacetime {
 namespace {
@@ -159,7 +160,12 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
     if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
     files.emplace_back(dir + "/" + problem.characters()[c].model->name + ".urdf", urdf.xml);
   }
-  files.emplace_back(dir + "/motion.json", motionJson(sampleAnimation(problem, rateHz)));
+  const Animation animation = sampleAnimation(problem, rateHz);
+  for (size_t c = 0; c < problem.characters().size(); ++c)
+    files.emplace_back(dir + "/" + problem.characters()[c].model->name + ".bvh",
+                       motionBvh(*problem.characters()[c].model, problem.scene().characters[c],
+                                 animation.characters[c]));
+  files.emplace_back(dir + "/motion.json", motionJson(animation));
   files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem));
   for (const auto& [path, text] : files)
     if (!writeFileAtomically(path, text, error)) return false;

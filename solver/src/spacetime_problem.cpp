@@ -36,6 +36,27 @@ std::vector<double> intervalTimes(const Transcription& tr, double a, double b) {
   return times;
 }
 
+// The order-th derivative in u of the root's bubble j, 16 u^2 (1-u)^2 (2u-1)^j (1 at the
+// middle for j = 0; zero with its slope at both ends).
+double bubble(int j, double u, int order) {
+  std::vector<double> c = {0, 0, 16, -32, 16};  // ascending powers of u
+  for (int i = 0; i < j; ++i) {                 // times (2u - 1)
+    std::vector<double> next(c.size() + 1, 0.0);
+    for (size_t k = 0; k < c.size(); ++k) {
+      next[k] -= c[k];
+      next[k + 1] += 2 * c[k];
+    }
+    c = std::move(next);
+  }
+  for (int d = 0; d < order; ++d) {
+    for (size_t k = 1; k < c.size(); ++k) c[k - 1] = k * c[k];
+    c.back() = 0;
+  }
+  double v = 0;
+  for (size_t k = c.size(); k-- > 0;) v = v * u + c[k];
+  return v;
+}
+
 }  // namespace
 
 SpacetimeProblem::SpacetimeProblem(const Scene& scene) : scene_(scene) {}
@@ -78,13 +99,15 @@ std::vector<std::pair<double, double>> SpacetimeProblem::flightPhases(int c) con
 GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order,
                                         bool before) const {
   GroupBasis gb;
-  gb.count = 4;
   if (!g.hermite) {
     const BSplineBasis b = g.spline.basis(t);
     const auto& w = b.derivative(order);
+    const int n = static_cast<int>(g.dofs.size());
+    gb.count = 4;
     for (int i = 0; i < 4; ++i) {
-      gb.block[i] = b.first + i;
-      gb.part[i] = 0;
+      gb.start[i] = g.offset + (b.first + i) * n;
+      gb.size[i] = n;
+      gb.index[i] = 0;
       gb.weight[i] = w[i];
     }
     return gb;
@@ -113,9 +136,24 @@ GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int 
     default: b = {12, 6, -12, 6}; break;
   }
   const double scale = std::pow(h, -order);
-  gb.block = {k, k, k + 1, k + 1};
-  gb.part = {0, 1, 0, 1};
-  gb.weight = {b[0] * scale, b[1] * h * scale, b[2] * scale, b[3] * h * scale};
+  const int n = static_cast<int>(g.dofs.size()), size = g.blockSize();
+  gb.count = 4;
+  gb.start = {};
+  gb.start[0] = gb.start[1] = g.offset + k * size;
+  gb.start[2] = gb.start[3] = g.offset + (k + 1) * size;
+  for (int i = 0; i < 4; ++i) gb.size[i] = size;
+  gb.index[1] = gb.index[3] = n;
+  gb.weight[0] = b[0] * scale;
+  gb.weight[1] = b[1] * h * scale;
+  gb.weight[2] = b[2] * scale;
+  gb.weight[3] = b[3] * h * scale;
+  for (int j = 0; j < g.bubbles; ++j) {
+    gb.start[gb.count] = g.bubbleOffset + k * g.bubbleBlockSize();
+    gb.size[gb.count] = g.bubbleBlockSize();
+    gb.index[gb.count] = j * n;
+    gb.weight[gb.count] = bubble(j, u, order) * scale;
+    ++gb.count;
+  }
   return gb;
 }
 
@@ -127,8 +165,8 @@ void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order,
     if (n == 0) continue;  // Ceres has no zero-size parameter blocks
     const GroupBasis gb = groupBasis(c, g, t, order, before);
     for (int i = 0; i < gb.count; ++i) {
-      const int blk = in.block(x_.data() + g.offset + gb.block[i] * g.blockSize(), g.blockSize());
-      for (int k = 0; k < n; ++k) in.add(row0 + g.dofs[k], blk, gb.part[i] * n + k, gb.weight[i]);
+      const int blk = in.block(x_.data() + gb.start[i], gb.size[i]);
+      for (int k = 0; k < n; ++k) in.add(row0 + g.dofs[k], blk, gb.index[i] + k, gb.weight[i]);
     }
   }
 }
@@ -205,6 +243,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     if (!unactuated.dofs.empty()) {
       unactuated.hermite = true;
       unactuated.breaks = transcription_.breakpoints;
+      unactuated.bubbles = std::max(0, scene_.transcription.samplesPerSegment - 2);
       // An impact repeats its breakpoint: one velocity before, one after (positions are made
       // equal by the impact term).
       for (const TermSpec& t : scene_.terms)
@@ -218,7 +257,8 @@ bool SpacetimeProblem::assemble(std::string* error) {
     }
     for (DofGroup& g : cv.groups) {
       g.offset = size;
-      size += g.blockSize() * g.blockCount();
+      g.bubbleOffset = size + g.blockSize() * g.blockCount();
+      size += g.variableCount();
     }
     characters_.push_back(cv);
   }
@@ -608,9 +648,32 @@ Eigen::VectorXd SpacetimeProblem::jointStateOnSide(int c, double t, int order, b
     const GroupBasis gb = groupBasis(c, g, t, order, before);
     for (int i = 0; i < gb.count; ++i)
       for (int k = 0; k < n; ++k)
-        out[g.dofs[k]] += gb.weight[i] * x_[g.offset + gb.block[i] * g.blockSize() + gb.part[i] * n + k];
+        out[g.dofs[k]] += gb.weight[i] * x_[gb.start[i] + gb.index[i] + k];
   }
   return out;
+}
+
+void SpacetimeProblem::fitBubbles(int c, const DofGroup& g,
+                                  const std::function<Eigen::VectorXd(double)>& target) {
+  const int n = static_cast<int>(g.dofs.size()), m = g.bubbles;
+  if (m == 0) return;
+  std::fill(x_.begin() + g.bubbleOffset, x_.begin() + g.offset + g.variableCount(), 0.0);
+  for (size_t k = 0; k + 1 < g.breaks.size(); ++k) {
+    const double a = g.breaks[k], h = g.breaks[k + 1] - a;
+    if (h < kTimeTolerance) continue;  // an impact's repeated breakpoint
+    // Interpolate the target at m interior points: the bubbles vanish at the ends, so the
+    // Hermite part keeps the breakpoint data.
+    Eigen::MatrixXd B(m, m), R(m, n);
+    for (int i = 0; i < m; ++i) {
+      const double u = (i + 1.0) / (m + 1), t = a + u * h;
+      for (int j = 0; j < m; ++j) B(i, j) = bubble(j, u, 0);
+      const Eigen::VectorXd want = target(t), have = jointState(c, t, 0);
+      for (int d = 0; d < n; ++d) R(i, d) = want[g.dofs[d]] - have[g.dofs[d]];
+    }
+    const Eigen::MatrixXd coefficients = B.partialPivLu().solve(R);
+    for (int j = 0; j < m; ++j)
+      for (int d = 0; d < n; ++d) x_[g.bubbleOffset + k * g.bubbleBlockSize() + j * n + d] = coefficients(j, d);
+  }
 }
 
 Eigen::VectorXd SpacetimeProblem::jointStateBefore(int c, double t, int order) const {
@@ -688,6 +751,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
           x_[g.offset + k * 2 * n + n + d] = v[g.dofs[d]];
         }
       }
+      fitBubbles(static_cast<int>(c), g, [&](double t) { return previous.jointState(pc, clampTime(t), 0); });
     }
   }
   for (ContactVariables& ct : contacts_) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <random>
 
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
@@ -26,10 +27,14 @@ std::unique_ptr<SpacetimeProblem> solved(const Scene& scene, SolverSummary* summ
 }
 
 // Released at rest with no contact, the optimum keeps the joints still (no torque needed in
-// free fall) and the root falls as a projectile, y = -g t^2 / 2, on the dense grid too.
-TEST(Luxo, FreeFallIsAProjectile) {
+// free fall) and the root falls as a projectile, y = -g t^2 / 2, on the dense grid too - with
+// the root's C1 cubics (2 samples per segment) and with its higher-degree curves (3, 4).
+class LuxoSamples : public ::testing::TestWithParam<int> {};
+
+TEST_P(LuxoSamples, FreeFallIsAProjectile) {
   Scene scene = luxoScene();
   scene.endTime = 0.4;
+  scene.transcription.samplesPerSegment = GetParam();
   std::vector<TermSpec> kept;
   for (const TermSpec& t : scene.terms)
     if (t.id == "start_pose" || t.id == "start_rest") kept.push_back(t);
@@ -47,6 +52,45 @@ TEST(Luxo, FreeFallIsAProjectile) {
     EXPECT_NEAR(q[3], 0.4, 2e-2) << t;                    // j1 barely moves
   }
 }
+
+// The root's curves at random variables: velocity and acceleration are the time derivatives
+// of position and velocity (central differences inside every interval), and position and
+// velocity are continuous at every breakpoint but the landing impact's.
+TEST_P(LuxoSamples, RootCurvesAreConsistentAndC1) {
+  Scene scene = luxoScene();
+  scene.transcription.samplesPerSegment = GetParam();
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  for (double& x : problem->variables()) x += noise(rng);
+  const std::vector<double>& breaks = problem->characters()[0].groups[1].breaks;
+  for (size_t k = 0; k + 1 < breaks.size(); ++k) {
+    const double a = breaks[k], b = breaks[k + 1], h = 1e-6;
+    if (b - a < 1e-9) continue;
+    for (double u : {0.13, 0.5, 0.87}) {
+      const double t = a + u * (b - a);
+      for (int order = 0; order < 2; ++order) {
+        const Eigen::VectorXd fd =
+            (problem->jointState(0, t + h, order) - problem->jointState(0, t - h, order)) / (2 * h);
+        const Eigen::VectorXd exact = problem->jointState(0, t, order + 1);
+        EXPECT_LT((fd - exact).head(3).cwiseAbs().maxCoeff(), 1e-5 * (1 + exact.cwiseAbs().maxCoeff()))
+            << "t=" << t << " order " << order;
+      }
+    }
+    if (k == 0 || std::abs(breaks[k - 1] - a) < 1e-9 || (k + 2 < breaks.size() && std::abs(breaks[k + 2] - b) < 1e-9))
+      continue;  // the first breakpoint, or next to the impact's repeated one
+    for (int order = 0; order < 2; ++order) {
+      const Eigen::VectorXd left = problem->jointStateBefore(0, a, order);  // interval ending at a
+      const Eigen::VectorXd right = problem->jointState(0, a, order);       // interval starting at a
+      EXPECT_LT((left - right).head(3).cwiseAbs().maxCoeff(), 1e-9 * (1 + right.cwiseAbs().maxCoeff()))
+          << "breakpoint " << a << " order " << order;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(RootDegree, LuxoSamples, ::testing::Values(2, 3, 4));
 
 TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
   const Scene scene = luxoScene();

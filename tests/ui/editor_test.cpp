@@ -8,6 +8,8 @@
 #include <QElapsedTimer>
 #include <QLineEdit>
 #include <QStandardPaths>
+#include <QFile>
+#include <QFileInfo>
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
@@ -191,6 +193,32 @@ class EditorTest : public QObject {
     const Eigen::MatrixXd& b = loaded.motion()->animation.characters[0].q;
     QCOMPARE(a.rows(), b.rows());
     QCOMPARE((a - b).cwiseAbs().maxCoeff(), 0.0);  // the same variables give the same motion
+  }
+
+  // Every export of a solved motion writes its file: motion JSON and CSV, URDF, and a BVH with
+  // one frame per displayed sample.
+  void exportsWriteEveryFormat() {
+    QTemporaryDir dir;
+    MainWindow w;
+    w.solveOnOpen = false;
+    QString error;
+    QVERIFY(w.openFile(":/scenes/particle.json", &error));
+    QVERIFY(!w.exportBvh(dir.filePath("none"), &error));  // nothing solved yet: a clear error
+    QVERIFY(error.contains("solve first"));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QVERIFY2(w.exportMotionJson(dir.filePath("motion.json"), &error), qPrintable(error));
+    QVERIFY2(w.exportMotionCsv(dir.filePath("motion.csv"), &error), qPrintable(error));
+    QVERIFY2(w.exportUrdf(dir.filePath("urdf"), &error), qPrintable(error));
+    QVERIFY2(w.exportBvh(dir.filePath("bvh"), &error), qPrintable(error));
+    for (const char* name : {"motion.json", "motion.csv", "urdf/particle.urdf", "bvh/particle.bvh"})
+      QVERIFY2(QFileInfo(dir.filePath(name)).size() > 0, name);
+    QFile bvh(dir.filePath("bvh/particle.bvh"));
+    QVERIFY(bvh.open(QIODevice::ReadOnly));
+    const QString text = QString::fromUtf8(bvh.readAll());
+    QVERIFY(text.startsWith("HIERARCHY\nROOT "));
+    const auto frames = w.document()->motion()->animation.characters[0].times.size();
+    QVERIFY2(text.contains(QString("Frames: %1\n").arg(frames)), qPrintable(text.left(400)));
   }
 
   // The longest the event loop waited during the first 4 s of a Luxo solve, and the number of

@@ -20,6 +20,7 @@
 #include "core/scene_io.h"
 #include "dynamics/build_model.h"
 #include "dynamics/urdf_export.h"
+#include "solver/bvh_export.h"
 #include "solver/outputs.h"
 
 namespace spacetime::ui {
@@ -159,6 +160,7 @@ void MainWindow::createActions() {
     };
   };
   action(exportMenu, tr("URDF…"), QKeySequence(), exportDir(tr("Export URDF"), &MainWindow::exportUrdf));
+  action(exportMenu, tr("Motion (BVH)…"), QKeySequence(), exportDir(tr("Export BVH"), &MainWindow::exportBvh));
   action(exportMenu, tr("PNG image sequence…"), QKeySequence(), exportDir(tr("Export images"), &MainWindow::exportImageSequence));
   file->addSeparator();
   action(file, tr("&Quit"), QKeySequence::Quit, [this] { close(); });
@@ -292,6 +294,23 @@ bool MainWindow::exportUrdf(const QString& directory, QString* error) {
     std::string why;
     const QString path = directory + "/" + QString::fromStdString(c.id) + ".urdf";
     if (!writeFileAtomically(path.toStdString(), spacetime::exportUrdf(model, c).xml, &why)) {
+      *error = QString::fromStdString(why);
+      return false;
+    }
+  }
+  return true;
+}
+
+bool MainWindow::exportBvh(const QString& directory, QString* error) {
+  const std::shared_ptr<const SolvedMotion> motion = doc_.motion();
+  if (!motion || !motionFitsScene(*motion, doc_.scene())) { *error = tr("Nothing to export: solve first."); return false; }
+  if (!QDir().mkpath(directory)) { *error = tr("%1: cannot create the folder").arg(directory); return false; }
+  const Scene& s = doc_.scene();
+  for (size_t c = 0; c < s.characters.size(); ++c) {
+    const Model<double> model = buildModel(s.characters[c], s.gravity);
+    std::string why;
+    const QString path = directory + "/" + QString::fromStdString(s.characters[c].id) + ".bvh";
+    if (!writeFileAtomically(path.toStdString(), motionBvh(model, s.characters[c], motion->animation.characters[c]), &why)) {
       *error = QString::fromStdString(why);
       return false;
     }

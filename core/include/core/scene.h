@@ -119,8 +119,11 @@ struct ObjectiveSpec {
 };
 
 struct TranscriptionSpec {
+  // Gauss points between breakpoints; the floating root's curves have degree samples + 1 (2:
+  // C1 cubics, de Boor-Swartz). At most kMaxSamplesPerSegment.
+  static constexpr int kMaxSamplesPerSegment = 8;
   double controlPointsPerSecond = 20;
-  int samplesPerSegment = 2;  // Gauss points between breakpoints (2: de Boor-Swartz)
+  int samplesPerSegment = 2;
 };
 
 struct SolverSpec {

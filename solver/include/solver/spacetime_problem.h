@@ -12,7 +12,9 @@
 
 #include <ceres/problem.h>
 
+#include <algorithm>
 #include <array>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -29,10 +31,12 @@ namespace spacetime {
 // Degrees of freedom are split in two groups.
 // - Actuated dofs: uniform cubic B-splines (C2) at the scene's control-point rate; their shape
 //   is what the animator sees and the smoothness term acts on.
-// - Unactuated dofs (the floating root): C1 piecewise cubic Hermite curves (a position and a
-//   velocity per breakpoint) collocated at two Gauss points per interval - the convergent
-//   collocation of de Boor & Swartz (1973) for second-order ODEs, with as many unknowns as
-//   physics equations, so the root follows the dynamics the joints drive. A C2 spline
+// - Unactuated dofs (the floating root): C1 piecewise polynomials of degree s + 1 collocated at
+//   the s Gauss points of each interval (s = samples per segment) - the convergent collocation
+//   of de Boor & Swartz (1973) for second-order ODEs, with as many unknowns as physics
+//   equations, so the root follows the dynamics the joints drive. Each interval is a cubic
+//   Hermite curve (a position and a velocity per breakpoint, shared with the neighbours) plus
+//   s - 2 "bubbles" u^2 (1-u)^2 (2u-1)^j that vanish with their slope at both ends. A C2 spline
 //   collocated once per segment would have a null mode (alternating control points vanish at
 //   segment midpoints) and could wiggle freely between samples; a C2 spline collocated more
 //   often would have fewer unknowns than equations. The root's acceleration may jump at
@@ -41,21 +45,32 @@ struct DofGroup {
   bool hermite = false;
   UniformBSpline spline;         // B-spline group
   std::vector<double> breaks;    // Hermite group: breakpoints
+  int bubbles = 0;               // Hermite group: interior coefficients per interval and dof
   std::vector<int> dofs;         // dof indices in this group
   int offset = 0;  // B-spline: control point k at offset + k * n; Hermite: breakpoint k holds
                    // positions then velocities at offset + k * 2n (n = dofs.size())
+  int bubbleOffset = 0;  // Hermite: interval k's bubbles at bubbleOffset + k * bubbles * n,
+                         // bubble j of dof d at + j * n + d
   int blockSize() const { return (hermite ? 2 : 1) * static_cast<int>(dofs.size()); }
   int blockCount() const {
     return hermite ? static_cast<int>(breaks.size()) : spline.controlPointCount();
   }
+  int bubbleBlockSize() const { return bubbles * static_cast<int>(dofs.size()); }
+  // All of the group's values: blocks, then (Hermite) bubbles.
+  int variableCount() const {
+    return blockSize() * blockCount() +
+           (hermite ? bubbleBlockSize() * std::max(0, blockCount() - 1) : 0);
+  }
 };
 
-// The linear map from a group's blocks to its dofs' derivative of some order at a time:
-// dof k of the group = sum over i of weight[i] * block[block[i]][part[i] * n + k].
+// The linear map from a group's parameter blocks to its dofs' derivative of some order at a
+// time: dof k of the group = sum over i of weight[i] * x[start[i] + index[i] + k], where
+// x[start[i] .. start[i] + size[i]) is one parameter block.
 struct GroupBasis {
+  static constexpr int kCapacity = 4 + TranscriptionSpec::kMaxSamplesPerSegment - 2;
   int count = 0;
-  std::array<int, 4> block{}, part{};
-  std::array<double, 4> weight{};
+  std::array<int, kCapacity> start{}, size{}, index{};
+  std::array<double, kCapacity> weight{};
 };
 
 struct CharacterVariables {
@@ -160,6 +175,9 @@ class SpacetimeProblem {
   GroupBasis groupBasis(int character, const DofGroup& g, double t, int order,
                         bool before = false) const;
   void addImpactTerms(int contact);
+  // Sets a Hermite group's bubbles so that the group interpolates target(t) (a full joint
+  // vector) at interior points of each interval, its breakpoint data already set.
+  void fitBubbles(int character, const DofGroup& g, const std::function<Eigen::VectorXd(double)>& target);
   Eigen::VectorXd jointStateOnSide(int character, double t, int order, bool before) const;
   // Inputs of a sample (q, qd, qdd, active contacts' forces) and the active contacts.
   std::vector<int> addSampleInputs(InputMap& in, int character, double t);

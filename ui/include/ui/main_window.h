@@ -48,6 +48,7 @@ class MainWindow : public QMainWindow {
   bool exportMotionJson(const QString& path, QString* error);
   bool exportMotionCsv(const QString& path, QString* error);
   bool exportUrdf(const QString& directory, QString* error);
+  bool exportBvh(const QString& directory, QString* error);  // <character>.bvh at the display rate
   bool exportImageSequence(const QString& directory, QString* error);  // frame_0000.png ...
 
   // Autosave: the file the current document autosaves to, writing it, and the recovery check.
