@@ -155,16 +155,15 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
   }
   // Build every file's contents first, then write them; a failure names the file.
   std::vector<std::pair<std::string, std::string>> files;
-  for (size_t c = 0; c < problem.characters().size(); ++c) {
-    const UrdfExport urdf = exportUrdf(*problem.characters()[c].model, problem.scene().characters[c]);
-    if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
-    files.emplace_back(dir + "/" + problem.characters()[c].model->name + ".urdf", urdf.xml);
-  }
   const Animation animation = sampleAnimation(problem, rateHz);
-  for (size_t c = 0; c < problem.characters().size(); ++c)
-    files.emplace_back(dir + "/" + problem.characters()[c].model->name + ".bvh",
-                       motionBvh(*problem.characters()[c].model, problem.scene().characters[c],
-                                 animation.characters[c]));
+  for (size_t c = 0; c < problem.characters().size(); ++c) {
+    const Model<double>& model = *problem.characters()[c].model;
+    const CharacterSpec& spec = problem.scene().characters[c];
+    const UrdfExport urdf = exportUrdf(model, spec);
+    if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
+    files.emplace_back(dir + "/" + model.name + ".urdf", urdf.xml);
+    files.emplace_back(dir + "/" + model.name + ".bvh", motionBvh(model, spec, animation.characters[c]));
+  }
   files.emplace_back(dir + "/motion.json", motionJson(animation));
   files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem));
   for (const auto& [path, text] : files)

@@ -137,8 +137,7 @@ GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int 
   }
   const double scale = std::pow(h, -order);
   const int n = static_cast<int>(g.dofs.size()), size = g.blockSize();
-  gb.count = 4;
-  gb.start = {};
+  gb.count = 4;  // index[0] = index[2] = 0: positions; index[1] = index[3] = n: velocities
   gb.start[0] = gb.start[1] = g.offset + k * size;
   gb.start[2] = gb.start[3] = g.offset + (k + 1) * size;
   for (int i = 0; i < 4; ++i) gb.size[i] = size;

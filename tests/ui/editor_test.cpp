@@ -32,8 +32,8 @@ void setSpin(QWidget* vectorEditor, const char* axis, double value) {
   spin->setValue(value);
 }
 
-// Opens the Luxo jump in a window that does not solve on its own; shown at `size` when given.
-bool openLuxo(MainWindow& w, std::optional<QSize> size = std::nullopt) {
+// Opens a shipped scene in a window that does not solve on its own; shown at `size` when given.
+bool openScene(MainWindow& w, const QString& path, std::optional<QSize> size = std::nullopt) {
   w.solveOnOpen = false;
   if (size) {
     w.resize(*size);
@@ -41,9 +41,20 @@ bool openLuxo(MainWindow& w, std::optional<QSize> size = std::nullopt) {
     if (!QTest::qWaitForWindowExposed(&w)) return false;
   }
   QString error;
-  if (w.openFile(":/scenes/luxo_jump.json", &error)) return true;
+  if (w.openFile(path, &error)) return true;
   qWarning("%s", qPrintable(error));
   return false;
+}
+
+bool openLuxo(MainWindow& w, std::optional<QSize> size = std::nullopt) {
+  return openScene(w, ":/scenes/luxo_jump.json", size);
+}
+
+// Opens the particle and solves it to the end.
+bool solvedParticle(MainWindow& w) {
+  if (!openScene(w, ":/scenes/particle.json")) return false;
+  w.solve();
+  return w.solverJob()->waitForFinished(60000);
 }
 
 Scene emptyScene() {
@@ -175,12 +186,9 @@ class EditorTest : public QObject {
   void saveThenLoadIsIdenticalWithTheSolution() {
     QTemporaryDir dir;
     MainWindow w;
-    w.solveOnOpen = false;
-    QString error;
-    QVERIFY(w.openFile(":/scenes/particle.json", &error));
-    w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QVERIFY(solvedParticle(w));
     QVERIFY(w.document()->motion() && w.document()->motion()->converged);
+    QString error;
     const QString path = dir.filePath("particle_saved.json");
     QVERIFY2(w.saveFile(path, &error), qPrintable(error));
     QVERIFY(!w.document()->isModified());
@@ -199,14 +207,13 @@ class EditorTest : public QObject {
   // one frame per displayed sample.
   void exportsWriteEveryFormat() {
     QTemporaryDir dir;
-    MainWindow w;
-    w.solveOnOpen = false;
+    MainWindow before;
+    QVERIFY(openScene(before, ":/scenes/particle.json"));
     QString error;
-    QVERIFY(w.openFile(":/scenes/particle.json", &error));
-    QVERIFY(!w.exportBvh(dir.filePath("none"), &error));  // nothing solved yet: a clear error
+    QVERIFY(!before.exportBvh(dir.filePath("none"), &error));  // nothing solved yet: a clear error
     QVERIFY(error.contains("solve first"));
-    w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(60000));
+    MainWindow w;
+    QVERIFY(solvedParticle(w));
     QVERIFY2(w.exportMotionJson(dir.filePath("motion.json"), &error), qPrintable(error));
     QVERIFY2(w.exportMotionCsv(dir.filePath("motion.csv"), &error), qPrintable(error));
     QVERIFY2(w.exportUrdf(dir.filePath("urdf"), &error), qPrintable(error));

@@ -288,29 +288,29 @@ bool MainWindow::exportMotionCsv(const QString& path, QString* error) {
 }
 
 bool MainWindow::exportUrdf(const QString& directory, QString* error) {
-  QDir().mkpath(directory);
-  for (const CharacterSpec& c : doc_.scene().characters) {
-    const Model<double> model = buildModel(c, doc_.scene().gravity);
-    std::string why;
-    const QString path = directory + "/" + QString::fromStdString(c.id) + ".urdf";
-    if (!writeFileAtomically(path.toStdString(), spacetime::exportUrdf(model, c).xml, &why)) {
-      *error = QString::fromStdString(why);
-      return false;
-    }
-  }
-  return true;
+  return writeCharacterFiles(directory, "urdf", error, [](size_t, const CharacterSpec& c, const Model<double>& model) {
+    return spacetime::exportUrdf(model, c).xml;
+  });
 }
 
 bool MainWindow::exportBvh(const QString& directory, QString* error) {
   const std::shared_ptr<const SolvedMotion> motion = doc_.motion();
   if (!motion || !motionFitsScene(*motion, doc_.scene())) { *error = tr("Nothing to export: solve first."); return false; }
+  return writeCharacterFiles(directory, "bvh", error, [&](size_t i, const CharacterSpec& c, const Model<double>& model) {
+    return motionBvh(model, c, motion->animation.characters[i]);
+  });
+}
+
+bool MainWindow::writeCharacterFiles(
+    const QString& directory, const QString& extension, QString* error,
+    const std::function<std::string(size_t, const CharacterSpec&, const Model<double>&)>& text) {
   if (!QDir().mkpath(directory)) { *error = tr("%1: cannot create the folder").arg(directory); return false; }
   const Scene& s = doc_.scene();
-  for (size_t c = 0; c < s.characters.size(); ++c) {
-    const Model<double> model = buildModel(s.characters[c], s.gravity);
+  for (size_t i = 0; i < s.characters.size(); ++i) {
+    const CharacterSpec& c = s.characters[i];
     std::string why;
-    const QString path = directory + "/" + QString::fromStdString(s.characters[c].id) + ".bvh";
-    if (!writeFileAtomically(path.toStdString(), motionBvh(model, s.characters[c], motion->animation.characters[c]), &why)) {
+    const QString path = directory + "/" + QString::fromStdString(c.id) + "." + extension;
+    if (!writeFileAtomically(path.toStdString(), text(i, c, buildModel(c, s.gravity)), &why)) {
       *error = QString::fromStdString(why);
       return false;
     }

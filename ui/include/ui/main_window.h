@@ -10,6 +10,8 @@
 #include <QLabel>
 #include <QMainWindow>
 #include <QTimer>
+#include <functional>
+#include <string>
 
 #include "ui/builder_panel.h"
 #include "ui/constraints_panel.h"
@@ -62,6 +64,11 @@ class MainWindow : public QMainWindow {
   void dropEvent(QDropEvent* e) override;
 
  private:
+  // Writes <directory>/<character id>.<extension> for every character of the scene, each with
+  // text(index, spec, model); creates the directory. False with a reason on the first failure.
+  bool writeCharacterFiles(
+      const QString& directory, const QString& extension, QString* error,
+      const std::function<std::string(size_t, const CharacterSpec&, const Model<double>&)>& text);
   void createActions();
   void updateTitle();
   bool maybeSave();
