@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages Spacetime needs, only those that are missing.
+# Installs the Debian 12 packages Spacetime needs, only those that are missing, and the Khronos
+# glTF Validator (npm) the tests check exported glTF with, into .cache/ (not committed).
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache pkg-config
           libeigen3-dev libceres-dev nlohmann-json3-dev
-          libgtest-dev libbenchmark-dev libmujoco-dev
+          libgtest-dev libbenchmark-dev libmujoco-dev libtinygltf-dev
           qt6-base-dev libqt6opengl6-dev qt6-charts-dev libglm-dev libgl-dev
           xvfb xauth)
 missing=()
+# Node.js with npm for the validator (Debian's nodejs and npm unless a Node.js with npm is there).
+command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
 done
@@ -15,4 +18,12 @@ if [ ${#missing[@]} -gt 0 ]; then
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}"
+fi
+
+validator_version=2.0.0-dev.3.10
+validator_dir="$(cd "$(dirname "$0")/.." && pwd)/.cache/gltf-validator"
+if ! grep -qs "\"version\": \"$validator_version\"" "$validator_dir/node_modules/gltf-validator/package.json"; then
+  echo "installing the Khronos glTF Validator $validator_version (npm) into $validator_dir"
+  mkdir -p "$validator_dir"
+  npm install --silent --no-save --no-audit --no-fund --prefix "$validator_dir" "gltf-validator@$validator_version"
 fi

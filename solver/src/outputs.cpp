@@ -8,6 +8,7 @@
 #include "core/atomic_file.h"
 #include "dynamics/urdf_export.h"
 #include "solver/bvh_export.h"
+#include "solver/gltf_export.h"
 
 namespace spacetime {
 namespace {
@@ -164,7 +165,10 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
     files.emplace_back(dir + "/" + model.name + ".urdf", urdf.xml);
     files.emplace_back(dir + "/" + model.name + ".bvh", motionBvh(model, spec, animation.characters[c]));
   }
+  std::vector<const Model<double>*> models;
+  for (const CharacterVariables& c : problem.characters()) models.push_back(c.model.get());
   files.emplace_back(dir + "/motion.json", motionJson(animation));
+  files.emplace_back(dir + "/motion.glb", motionGlb(problem.scene(), models, animation));
   files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem));
   for (const auto& [path, text] : files)
     if (!writeFileAtomically(path, text, error)) return false;

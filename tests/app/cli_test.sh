@@ -9,7 +9,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 
 "$cli" solve "$scenes/particle.json" --out "$tmp/good" --quiet 2>"$tmp/good.err" || fail "good scene exited $?"
-for f in summary.json motion.json particle.urdf particle.bvh; do [ -s "$tmp/good/$f" ] || fail "missing $f"; done
+for f in summary.json motion.json motion.glb particle.urdf particle.bvh; do [ -s "$tmp/good/$f" ] || fail "missing $f"; done
 for key in '"formatVersion"' '"dofs"' '"actuated"' '"times"' '"q"' '"qd"' '"qdd"' '"tau"' '"contacts"' '"urdf"'; do
   grep -q "$key" "$tmp/good/motion.json" || fail "motion.json lacks $key"
 done

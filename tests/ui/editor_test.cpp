@@ -203,8 +203,8 @@ class EditorTest : public QObject {
     QCOMPARE((a - b).cwiseAbs().maxCoeff(), 0.0);  // the same variables give the same motion
   }
 
-  // Every export of a solved motion writes its file: motion JSON and CSV, URDF, and a BVH with
-  // one frame per displayed sample.
+  // Every export of a solved motion writes its file: motion JSON and CSV, URDF, glTF, and a BVH
+  // with one frame per displayed sample.
   void exportsWriteEveryFormat() {
     QTemporaryDir dir;
     MainWindow before;
@@ -218,7 +218,8 @@ class EditorTest : public QObject {
     QVERIFY2(w.exportMotionCsv(dir.filePath("motion.csv"), &error), qPrintable(error));
     QVERIFY2(w.exportUrdf(dir.filePath("urdf"), &error), qPrintable(error));
     QVERIFY2(w.exportBvh(dir.filePath("bvh"), &error), qPrintable(error));
-    for (const char* name : {"motion.json", "motion.csv", "urdf/particle.urdf", "bvh/particle.bvh"})
+    QVERIFY2(w.exportGltf(dir.filePath("motion.glb"), &error), qPrintable(error));
+    for (const char* name : {"motion.json", "motion.csv", "urdf/particle.urdf", "bvh/particle.bvh", "motion.glb"})
       QVERIFY2(QFileInfo(dir.filePath(name)).size() > 0, name);
     QFile bvh(dir.filePath("bvh/particle.bvh"));
     QVERIFY(bvh.open(QIODevice::ReadOnly));

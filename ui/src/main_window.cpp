@@ -21,6 +21,7 @@
 #include "dynamics/build_model.h"
 #include "dynamics/urdf_export.h"
 #include "solver/bvh_export.h"
+#include "solver/gltf_export.h"
 #include "solver/outputs.h"
 
 namespace spacetime::ui {
@@ -159,6 +160,7 @@ void MainWindow::createActions() {
       if (!dir.isEmpty() && !(this->*fn)(dir, &error)) QMessageBox::warning(this, title, error);
     };
   };
+  action(exportMenu, tr("Animated scene (glTF)…"), QKeySequence(), exportTo(tr("Export glTF"), "motion.glb", "glTF binary (*.glb)", &MainWindow::exportGltf));
   action(exportMenu, tr("URDF…"), QKeySequence(), exportDir(tr("Export URDF"), &MainWindow::exportUrdf));
   action(exportMenu, tr("Motion (BVH)…"), QKeySequence(), exportDir(tr("Export BVH"), &MainWindow::exportBvh));
   action(exportMenu, tr("PNG image sequence…"), QKeySequence(), exportDir(tr("Export images"), &MainWindow::exportImageSequence));
@@ -299,6 +301,17 @@ bool MainWindow::exportBvh(const QString& directory, QString* error) {
   return writeCharacterFiles(directory, "bvh", error, [&](size_t i, const CharacterSpec& c, const Model<double>& model) {
     return motionBvh(model, c, motion->animation.characters[i]);
   });
+}
+
+bool MainWindow::exportGltf(const QString& path, QString* error) {
+  const std::shared_ptr<const SolvedMotion> motion = doc_.motion();
+  if (!motion || !motionFitsScene(*motion, doc_.scene())) { *error = tr("Nothing to export: solve first."); return false; }
+  std::vector<const Model<double>*> models;
+  for (const Model<double>& m : doc_.models()) models.push_back(&m);
+  std::string why;
+  if (writeFileAtomically(path.toStdString(), motionGlb(doc_.scene(), models, motion->animation), &why)) return true;
+  *error = QString::fromStdString(why);
+  return false;
 }
 
 bool MainWindow::writeCharacterFiles(

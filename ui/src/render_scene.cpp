@@ -26,34 +26,18 @@ glm::mat4 bodyPose(const Data<double>& d, int body) {
   return m;
 }
 
-// Rotation taking the unit meshes' y axis to the geometry's axis.
-glm::mat4 axisRotation(int axis) {
-  if (axis == 0) return glm::rotate(glm::mat4(1.0f), -glm::half_pi<float>(), glm::vec3(0, 0, 1));
-  if (axis == 2) return glm::rotate(glm::mat4(1.0f), glm::half_pi<float>(), glm::vec3(1, 0, 0));
-  return glm::mat4(1.0f);
-}
-
 void addGeometry(RenderScene& rs, const Geometry& g, const glm::mat4& pose, const glm::vec4& color,
                  int character, const std::string& body, bool ghost) {
-  const glm::mat4 base = glm::translate(pose, toGlm(g.offset));
   auto add = [&](Mesh mesh, const glm::mat4& m) { rs.solids.push_back({mesh, m, color, character, body, ghost}); };
-  const float r = static_cast<float>(g.size[0]), len = static_cast<float>(g.size[1]);
-  switch (g.kind) {
-    case GeometryKind::None:  // a small marker so the body stays visible and pickable
-      add(Mesh::Sphere, glm::scale(base, glm::vec3(0.02f)));
-      break;
-    case GeometryKind::Box: add(Mesh::Cube, glm::scale(base, toGlm(g.size))); break;
-    case GeometryKind::Sphere: add(Mesh::Sphere, glm::scale(base, glm::vec3(r))); break;
-    case GeometryKind::Cylinder:
-      add(Mesh::Cylinder, glm::scale(base * axisRotation(g.axis), glm::vec3(r, len, r)));
-      break;
-    case GeometryKind::Capsule: {
-      const glm::mat4 a = base * axisRotation(g.axis);
-      add(Mesh::Cylinder, glm::scale(a, glm::vec3(r, len, r)));
-      add(Mesh::Sphere, glm::scale(glm::translate(a, glm::vec3(0, len / 2, 0)), glm::vec3(r)));
-      add(Mesh::Sphere, glm::scale(glm::translate(a, glm::vec3(0, -len / 2, 0)), glm::vec3(r)));
-      break;
-    }
+  if (g.kind == GeometryKind::None) {  // a small marker so the body stays visible and pickable
+    add(Mesh::Sphere, glm::scale(glm::translate(pose, toGlm(g.offset)), glm::vec3(0.02f)));
+    return;
+  }
+  for (const ShapePiece& piece : geometryPieces(g)) {
+    glm::mat4 placement;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) placement[c][r] = static_cast<float>(piece.placement.matrix()(r, c));
+    add(piece.shape, pose * placement);
   }
 }
 

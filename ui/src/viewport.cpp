@@ -8,59 +8,24 @@
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "core/shape_mesh.h"
+
 namespace spacetime::ui {
 
 namespace {
 
 using Vertices = std::vector<float>;  // interleaved position (3) and normal (3), triangles
 
-void push(Vertices& v, const glm::vec3& p, const glm::vec3& n) {
-  v.insert(v.end(), {p.x, p.y, p.z, n.x, n.y, n.z});
-}
-
-Vertices cubeMesh() {
+// The shared unit mesh (core/shape_mesh.h) unrolled into the interleaved triangle list drawn
+// with glDrawArrays.
+Vertices unrolled(UnitShape shape) {
+  const TriangleMesh mesh = unitShapeMesh(shape);
   Vertices v;
-  for (int axis = 0; axis < 3; ++axis)
-    for (float sign : {-1.0f, 1.0f}) {
-      glm::vec3 n(0.0f);
-      n[axis] = sign;
-      const glm::vec3 u = glm::vec3(n.y, n.z, n.x) * 0.5f, w = glm::vec3(n.z, n.x, n.y) * 0.5f;
-      const glm::vec3 c = n * 0.5f;
-      const glm::vec3 corners[4] = {c - u - w, c + u - w, c + u + w, c - u + w};
-      for (int i : {0, 1, 2, 0, 2, 3}) push(v, corners[i], n);
-    }
-  return v;
-}
-
-Vertices sphereMesh(int slices = 24, int stacks = 14) {
-  Vertices v;
-  auto at = [&](int i, int j) {
-    const float th = glm::pi<float>() * j / stacks, ph = glm::two_pi<float>() * i / slices;
-    return glm::vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
-  };
-  for (int j = 0; j < stacks; ++j)
-    for (int i = 0; i < slices; ++i) {
-      const glm::vec3 a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
-      for (const glm::vec3& p : {a, b, c, a, c, d}) push(v, p, p);
-    }
-  return v;
-}
-
-// Radius 1, y in [-0.5, 0.5]; a cone when topRadius is 0.
-Vertices cylinderMesh(float topRadius, int slices = 24) {
-  Vertices v;
-  const float slope = 1.0f - topRadius;  // outward normal tilt per unit height
-  for (int i = 0; i < slices; ++i) {
-    const float a0 = glm::two_pi<float>() * i / slices, a1 = glm::two_pi<float>() * (i + 1) / slices;
-    const glm::vec3 d0(std::cos(a0), 0, std::sin(a0)), d1(std::cos(a1), 0, std::sin(a1));
-    const glm::vec3 n0 = glm::normalize(d0 + glm::vec3(0, slope, 0)), n1 = glm::normalize(d1 + glm::vec3(0, slope, 0));
-    const glm::vec3 b0 = d0 + glm::vec3(0, -0.5f, 0), b1 = d1 + glm::vec3(0, -0.5f, 0);
-    const glm::vec3 t0 = d0 * topRadius + glm::vec3(0, 0.5f, 0), t1 = d1 * topRadius + glm::vec3(0, 0.5f, 0);
-    push(v, b0, n0); push(v, t1, n1); push(v, b1, n1);
-    push(v, b0, n0); push(v, t0, n0); push(v, t1, n1);
-    const glm::vec3 down(0, -1, 0), up(0, 1, 0);
-    push(v, glm::vec3(0, -0.5f, 0), down); push(v, b1, down); push(v, b0, down);
-    if (topRadius > 0) { push(v, glm::vec3(0, 0.5f, 0), up); push(v, t0, up); push(v, t1, up); }
+  v.reserve(mesh.indices.size() * 6);
+  for (std::uint32_t i : mesh.indices) {
+    const Eigen::Vector3f& p = mesh.positions[i];
+    const Eigen::Vector3f& n = mesh.normals[i];
+    v.insert(v.end(), {p.x(), p.y(), p.z(), n.x(), n.y(), n.z()});
   }
   return v;
 }
@@ -154,10 +119,10 @@ void Viewport::initializeGL() {
   };
   solidShader_ = load(":/shaders/solid.vert", ":/shaders/solid.frag");
   lineShader_ = load(":/shaders/line.vert", ":/shaders/line.frag");
-  uploadMesh(Mesh::Cube, cubeMesh());
-  uploadMesh(Mesh::Sphere, sphereMesh());
-  uploadMesh(Mesh::Cylinder, cylinderMesh(1.0f));
-  uploadMesh(Mesh::Cone, cylinderMesh(0.0f));
+  uploadMesh(Mesh::Cube, unrolled(UnitShape::Cube));
+  uploadMesh(Mesh::Sphere, unrolled(UnitShape::Sphere));
+  uploadMesh(Mesh::Cylinder, unrolled(UnitShape::Cylinder));
+  uploadMesh(Mesh::Cone, unrolled(UnitShape::Cone));
   lineVao_.create();
   lineVao_.bind();
   lineVbo_.create();

@@ -1,6 +1,6 @@
 // The command-line outputs of a solve: summary.json (solver summary + validity report),
-// motion.json (the Animation in the contract outside tools read), one URDF and one BVH per
-// character.
+// motion.json (the Animation in the contract outside tools read), motion.glb (the animated scene
+// as glTF), one URDF and one BVH per character.
 // Every file is written atomically; the directory is created if needed.
 #pragma once
 
@@ -20,8 +20,8 @@ std::string motionJson(const Animation& animation);
 // must share the time grid (sampleAnimation guarantees it).
 std::string motionCsv(const Animation& animation);
 
-// Writes summary.json, motion.json, <character>.urdf and <character>.bvh (the motion at the
-// same rate) into dir. False with a reason on error.
+// Writes summary.json, motion.json, motion.glb, <character>.urdf and <character>.bvh (the motion
+// at the same rate) into dir. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, double rateHz, const std::string& dir,
                        std::string* error, std::string* warning);

@@ -50,7 +50,8 @@ class MainWindow : public QMainWindow {
   bool exportMotionJson(const QString& path, QString* error);
   bool exportMotionCsv(const QString& path, QString* error);
   bool exportUrdf(const QString& directory, QString* error);
-  bool exportBvh(const QString& directory, QString* error);  // <character>.bvh at the display rate
+  bool exportBvh(const QString& directory, QString* error);
+  bool exportGltf(const QString& path, QString* error);  // one .glb: every character, animated  // <character>.bvh at the display rate
   bool exportImageSequence(const QString& directory, QString* error);  // frame_0000.png ...
 
   // Autosave: the file the current document autosaves to, writing it, and the recovery check.

@@ -2,9 +2,8 @@
 // characters' Models and the motion at a time - outside any GL code, so it is testable
 // without a display (as MuJoCo's mjv_updateScene feeds mjr_render). The GL widget only draws it.
 //
-// Solids are unit meshes (cube of side 1, sphere of radius 1, cylinder of radius 1 and height
-// 1 along y, cone likewise) placed by a 4x4 matrix that includes the scale; a capsule is a
-// cylinder and two spheres.
+// Solids are the unit meshes of core/shape_mesh.h placed by a 4x4 matrix that includes the
+// scale (a capsule is a cylinder and two spheres).
 #pragma once
 
 #include <glm/glm.hpp>
@@ -13,12 +12,13 @@
 #include <vector>
 
 #include "core/scene.h"
+#include "core/shape_mesh.h"
 #include "dynamics/model.h"
 #include "ui/solved_motion.h"
 
 namespace spacetime::ui {
 
-enum class Mesh { Cube, Sphere, Cylinder, Cone };
+using Mesh = UnitShape;  // the unit meshes of core/shape_mesh.h
 
 struct Solid {
   Mesh mesh = Mesh::Cube;

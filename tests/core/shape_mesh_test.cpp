@@ -1,0 +1,103 @@
+// The body meshes shared by the viewport and the glTF export: closed, wound counter-clockwise
+// seen from outside, normals pointing out, and the right size - checked by the divergence
+// theorem (a closed outward-wound mesh encloses the volume sum over triangles of a.(b x c)/6)
+// against each solid's analytic volume, and by each geometry's extents.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/shape_mesh.h"
+
+namespace spacetime {
+namespace {
+
+double enclosedVolume(const TriangleMesh& m) {
+  double v = 0;
+  for (size_t t = 0; t < m.indices.size(); t += 3) {
+    const Eigen::Vector3d a = m.positions[m.indices[t]].cast<double>();
+    const Eigen::Vector3d b = m.positions[m.indices[t + 1]].cast<double>();
+    const Eigen::Vector3d c = m.positions[m.indices[t + 2]].cast<double>();
+    v += a.dot(b.cross(c)) / 6;
+  }
+  return v;
+}
+
+// Every triangle has area, and its winding's normal agrees with its vertices' normals.
+void expectOutwardTriangles(const TriangleMesh& m) {
+  ASSERT_EQ(m.indices.size() % 3, 0u);
+  ASSERT_EQ(m.positions.size(), m.normals.size());
+  for (size_t t = 0; t < m.indices.size(); t += 3) {
+    const Eigen::Vector3f a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]],
+                          c = m.positions[m.indices[t + 2]];
+    const Eigen::Vector3f n = (b - a).cross(c - a);
+    ASSERT_GT(n.norm(), 1e-7f) << "degenerate triangle " << t / 3;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f& vn = m.normals[m.indices[t + k]];
+      EXPECT_NEAR(vn.norm(), 1.0f, 1e-5f);
+      EXPECT_GT(n.normalized().dot(vn), 0.5f) << "triangle " << t / 3 << " vertex " << k;
+    }
+  }
+}
+
+TEST(ShapeMesh, UnitShapesAreClosedOutwardAndOfTheirVolume) {
+  // Polygonal approximations of the round solids (24 slices, 14 stacks) lose a little volume.
+  const struct {
+    UnitShape shape;
+    double volume, tolerance;
+  } cases[] = {{UnitShape::Cube, 1.0, 1e-6},
+               {UnitShape::Sphere, 4 * M_PI / 3, 0.04},
+               {UnitShape::Cylinder, M_PI, 0.02},
+               {UnitShape::Cone, M_PI / 3, 0.02}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(static_cast<int>(c.shape));
+    const TriangleMesh m = unitShapeMesh(c.shape);
+    expectOutwardTriangles(m);
+    EXPECT_NEAR(enclosedVolume(m) / c.volume, 1.0, c.tolerance);
+  }
+}
+
+TEST(ShapeMesh, GeometryMeshesSpanTheirShapes) {
+  auto extents = [](const TriangleMesh& m) {
+    Eigen::Vector3f lo = m.positions[0], hi = m.positions[0];
+    for (const auto& p : m.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    return std::make_pair(Eigen::Vector3d(lo.cast<double>()), Eigen::Vector3d(hi.cast<double>()));
+  };
+  Geometry box;
+  box.kind = GeometryKind::Box;
+  box.size = {0.3, 0.1, 0.2};
+  box.offset = {0.05, 0.02, 0};
+  auto [lo, hi] = extents(geometryMesh(box));
+  EXPECT_LT((lo - (box.offset - box.size / 2)).norm(), 1e-6);
+  EXPECT_LT((hi - (box.offset + box.size / 2)).norm(), 1e-6);
+  expectOutwardTriangles(geometryMesh(box));
+  EXPECT_NEAR(enclosedVolume(geometryMesh(box)), 0.3 * 0.1 * 0.2, 1e-8);
+
+  // A capsule of radius 0.05 and length 0.4 along each axis reaches length/2 + radius along it
+  // and the radius across it.
+  for (int axis = 0; axis < 3; ++axis) {
+    Geometry capsule;
+    capsule.kind = GeometryKind::Capsule;
+    capsule.size = {0.05, 0.4, 0};
+    capsule.axis = axis;
+    const TriangleMesh m = geometryMesh(capsule);
+    expectOutwardTriangles(m);
+    auto [clo, chi] = extents(m);
+    for (int k = 0; k < 3; ++k) {
+      const double reach = k == axis ? 0.25 : 0.05;
+      EXPECT_NEAR(chi[k], reach, 1e-6) << "axis " << axis << " component " << k;
+      EXPECT_NEAR(clo[k], -reach, 1e-6) << "axis " << axis << " component " << k;
+    }
+  }
+  Geometry none;
+  EXPECT_TRUE(geometryMesh(none).indices.empty());
+}
+
+TEST(ShapeMesh, MirroredPlacementKeepsTrianglesOutward) {
+  TriangleMesh m;
+  m.append(unitShapeMesh(UnitShape::Cone), Eigen::Affine3d(Eigen::Scaling(Eigen::Vector3d(1, -2, 0.5))));
+  expectOutwardTriangles(m);
+  EXPECT_NEAR(enclosedVolume(m) / (M_PI / 3), 1.0, 0.02);
+}
+
+}  // namespace
+}  // namespace spacetime
