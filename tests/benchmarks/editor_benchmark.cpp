@@ -104,7 +104,7 @@ BENCHMARK(BM_ViewportFrame)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScrubFrame)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MotionUpdate)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_PinMoveToMotionOnScreen, particle, ":/scenes/particle.json", "p1")
-    ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(10);
+    ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(20);
 
 int main(int argc, char** argv) {
   useOpenGL33CoreByDefault();

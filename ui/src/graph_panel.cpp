@@ -289,28 +289,44 @@ bool GraphPanel::addFormula(const QString& text, QString* error) {
 }
 
 void GraphPanel::replot() {
-  plotted_.clear();
-  QChart* chart = view_->chart();
-  chart->removeAllSeries();
-  for (QAbstractAxis* axis : chart->axes()) chart->removeAxis(axis);
-  double lo = 1e300, hi = -1e300;
+  std::vector<PlotSeries> plotted;
   for (const QString& key : checked_) {
     PlotSeries s;
     QString error;
-    if (!computeSeries(*doc_, key, &s, &error)) continue;
-    plotted_.push_back(s);
+    if (computeSeries(*doc_, key, &s, &error)) plotted.push_back(std::move(s));
   }
-  auto* x = new QValueAxis;
-  x->setTitleText(tr("time (s)"));
-  x->setRange(doc_->scene().startTime, doc_->scene().endTime);
-  auto* y = new QValueAxis;
-  x->setLabelFormat("%.2f");
-  y->setLabelFormat("%.3g");
-  chart->addAxis(x, Qt::AlignBottom);
-  chart->addAxis(y, Qt::AlignLeft);
-  for (const PlotSeries& s : plotted_) {
-    auto* line = new QLineSeries;
-    line->setName(s.name);
+  QChart* chart = view_->chart();
+  // The same series as before (every solver iterate, every edit that keeps the plotted set):
+  // replace their points and ranges in place. Rebuilding series and axes costs QtCharts a
+  // relayout and new axis labels, several milliseconds per iterate on the interface thread.
+  QList<QAbstractSeries*> lines = chart->series();
+  bool sameSeries = lines.size() == static_cast<qsizetype>(plotted.size()) && chart->axes().size() == 2;
+  for (size_t i = 0; sameSeries && i < plotted.size(); ++i) sameSeries = lines[i]->name() == plotted[i].name;
+  auto* x = sameSeries ? qobject_cast<QValueAxis*>(chart->axes(Qt::Horizontal).value(0)) : nullptr;
+  auto* y = sameSeries ? qobject_cast<QValueAxis*>(chart->axes(Qt::Vertical).value(0)) : nullptr;
+  if (!x || !y) {
+    chart->removeAllSeries();
+    for (QAbstractAxis* axis : chart->axes()) chart->removeAxis(axis);
+    x = new QValueAxis;
+    x->setTitleText(tr("time (s)"));
+    x->setLabelFormat("%.2f");
+    y = new QValueAxis;
+    y->setLabelFormat("%.3g");
+    chart->addAxis(x, Qt::AlignBottom);
+    chart->addAxis(y, Qt::AlignLeft);
+    lines.clear();
+    for (const PlotSeries& s : plotted) {
+      auto* line = new QLineSeries;
+      line->setName(s.name);
+      chart->addSeries(line);
+      line->attachAxis(x);
+      line->attachAxis(y);
+      lines.push_back(line);
+    }
+  }
+  double lo = 1e300, hi = -1e300;
+  for (size_t k = 0; k < plotted.size(); ++k) {
+    const PlotSeries& s = plotted[k];
     QList<QPointF> points;
     points.reserve(static_cast<qsizetype>(s.times.size()));
     for (size_t i = 0; i < s.times.size(); ++i) {
@@ -318,11 +334,10 @@ void GraphPanel::replot() {
       lo = std::min(lo, s.values[i]);
       hi = std::max(hi, s.values[i]);
     }
-    line->replace(points);
-    chart->addSeries(line);
-    line->attachAxis(x);
-    line->attachAxis(y);
+    static_cast<QLineSeries*>(lines[static_cast<qsizetype>(k)])->replace(points);
   }
+  plotted_ = std::move(plotted);
+  x->setRange(doc_->scene().startTime, doc_->scene().endTime);
   if (lo > hi) { lo = -1; hi = 1; }
   const double pad = std::max(1e-9, 0.05 * (hi - lo));
   y->setRange(lo - pad, hi + pad);
