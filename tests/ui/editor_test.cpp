@@ -4,9 +4,11 @@
 // loses nothing, the interface never stalls while the solver runs, Stop leaves a consistent
 // document, and the viewport draws the lamp in its colours.
 #include <QComboBox>
+#include <QDockWidget>
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QLineEdit>
+#include <QSettings>
 #include <QStandardPaths>
 #include <QFile>
 #include <QFileInfo>
@@ -229,6 +231,65 @@ class EditorTest : public QObject {
     QVERIFY2(text.contains(QString("Frames: %1\n").arg(frames)), qPrintable(text.left(400)));
   }
 
+  // The dock layout survives a restart: closing saves it to QSettings, the next window restores
+  // it (a hidden panel stays hidden, a moved one stays where it was put).
+  void dockLayoutIsRestoredFromSettings() {
+    QSettings().clear();
+    {
+      MainWindow w;
+      w.resize(1200, 800);
+      w.show();
+      QVERIFY(QTest::qWaitForWindowExposed(&w));
+      w.findChild<QDockWidget*>("graphDock")->hide();
+      w.addDockWidget(Qt::RightDockWidgetArea, w.findChild<QDockWidget*>("builderDock"));
+      QVERIFY(w.close());
+    }
+    MainWindow restored;
+    restored.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&restored));
+    auto* graphs = restored.findChild<QDockWidget*>("graphDock");
+    auto* builder = restored.findChild<QDockWidget*>("builderDock");
+    QVERIFY(graphs && builder);
+    QVERIFY(graphs->isHidden());
+    QVERIFY(!builder->isHidden());
+    QCOMPARE(restored.dockWidgetArea(builder), Qt::RightDockWidgetArea);
+    QCOMPARE(restored.size(), QSize(1200, 800));
+    QSettings().clear();
+  }
+
+  // A session that dies leaves its autosave behind; the next session finds it and recovers the
+  // unsaved scene exactly, as a modified document without a file. A clean close removes the
+  // session's own autosave.
+  void autosaveIsRecoveredAfterACrash() {
+    for (const QString& f : MainWindow::pendingRecoveries()) QFile::remove(f);
+    auto* crashed = new MainWindow;
+    QVERIFY(openScene(*crashed, ":/scenes/particle.json"));
+    crashed->document()->edit("Move pin", [](Scene& s) {
+      for (TermSpec& t : s.terms)
+        if (t.kind == TermKind::Pin) t.position.y() += 0.25;
+    });
+    QVERIFY(crashed->writeAutosave());
+    const QString autosave = crashed->autosavePath();
+    const std::string unsaved = sceneToJson(crashed->document()->sceneForSave());
+    delete crashed;  // no closeEvent: as if the process had died
+    QVERIFY(MainWindow::pendingRecoveries().contains(autosave));
+
+    MainWindow w;
+    QString error;
+    QVERIFY2(w.recoverAutosave(autosave, &error), qPrintable(error));
+    QCOMPARE(sceneToJson(w.document()->sceneForSave()), unsaved);
+    QVERIFY(w.document()->isModified());
+    QVERIFY(w.document()->filePath().isEmpty());
+    QVERIFY(QFile::remove(autosave));
+
+    QVERIFY(w.writeAutosave());
+    QVERIFY(QFile::exists(w.autosavePath()));
+    QTemporaryDir dir;
+    QVERIFY2(w.saveFile(dir.filePath("recovered.json"), &error), qPrintable(error));
+    QVERIFY(w.close());  // saved, so no prompt
+    QVERIFY(!QFile::exists(w.autosavePath()));
+  }
+
   // The longest the event loop waited during the first 4 s of a Luxo solve, and the number of
   // iterates that reached the interface. With `shown`, the window is on screen and the timeline
   // plays, so every iterate and every frame is drawn.
@@ -260,10 +321,13 @@ class EditorTest : public QObject {
     const auto [worst, iterates] = eventLoopStallDuringLuxoSolve(false);
     qInfo("window hidden: longest event-loop gap %lld ms, %d iterates delivered", worst, iterates);
     QVERIFY(iterates >= 3);  // live refinement: iterates reached the interface
-    // The target is no gap over 50 ms. Measured here on 2 cores under Xvfb: 49-603 ms
-    // even with the window hidden, so the figure is reported, not asserted, until the cause is
-    // found (docs/STATUS.md, "Editor responsiveness").
+    // The target: no gap over 50 ms. With the window hidden the interface thread's own
+    // work is what is measured: 14-18 ms on this 2-core machine, also with a solver test running
+    // on the other core (session 5), so the target is asserted with that margin.
     QVERIFY(worst >= 0);
+    QVERIFY2(worst <= 50, qPrintable(QString("event loop stalled %1 ms").arg(worst)));
+    // With the window shown and the timeline playing, every frame is composited by Mesa's
+    // software renderer: 50-79 ms measured, reported here and in docs/STATUS.md, not asserted.
     const auto [shownWorst, shownIterates] = eventLoopStallDuringLuxoSolve(true);
     qInfo("window shown and playing: longest event-loop gap %lld ms, %d iterates drawn", shownWorst, shownIterates);
     QVERIFY(shownIterates >= 3);
@@ -335,7 +399,9 @@ class EditorTest : public QObject {
 
 int main(int argc, char** argv) {
   useOpenGL33CoreByDefault();
+  qputenv("SPACETIME_NO_RECOVERY", "1");  // no modal recovery prompt; the test recovers by hand
   QApplication app(argc, argv);
+  QStandardPaths::setTestModeEnabled(true);  // settings and autosaves under ~/.qttest
   QApplication::setOrganizationName("SpacetimeTest");
   QApplication::setApplicationName("SpacetimeTest");
   EditorTest test;

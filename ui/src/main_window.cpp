@@ -376,17 +376,20 @@ void MainWindow::offerRecovery() {
       this, tr("Recover"), tr("Spacetime did not close cleanly. Recover the unsaved scene autosaved at %1?")
                                .arg(QFileInfo(files.front()).lastModified().toString()),
       QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
-  if (answer == QMessageBox::Yes) {
-    QString error;
-    if (doc_.open(files.front(), &error)) {
-      // A recovered scene has no file yet: Save asks where.
-      Scene s = doc_.sceneForSave();
-      doc_.reset(s, {});
-      doc_.edit(tr("Recover"), [](Scene&) {});
-    }
-  }
+  QString error;
+  if (answer == QMessageBox::Yes && !recoverAutosave(files.front(), &error))
+    QMessageBox::warning(this, tr("Recover"), error);
   if (answer != QMessageBox::No)
     for (const QString& f : files) QFile::remove(f);
+}
+
+bool MainWindow::recoverAutosave(const QString& file, QString* error) {
+  if (!doc_.open(file, error)) return false;
+  // A recovered scene has no file yet (Save asks where) and is unsaved work.
+  Scene s = doc_.sceneForSave();
+  doc_.reset(s, {});
+  doc_.markModified();
+  return true;
 }
 
 bool MainWindow::maybeSave() {

@@ -43,6 +43,8 @@ class Document : public QObject {
 
   QString filePath() const { return path_; }
   bool isModified() const { return !undo_.isClean(); }
+  // Unsaved whatever the undo stack says (a recovered autosave): closing will ask to save.
+  void markModified() { undo_.resetClean(); }
 
   // Models of the scene's characters (empty when the scene cannot be built).
   const std::vector<Model<double>>& models() const { return models_; }

@@ -50,14 +50,17 @@ class MainWindow : public QMainWindow {
   bool exportMotionJson(const QString& path, QString* error);
   bool exportMotionCsv(const QString& path, QString* error);
   bool exportUrdf(const QString& directory, QString* error);
-  bool exportBvh(const QString& directory, QString* error);
-  bool exportGltf(const QString& path, QString* error);  // one .glb: every character, animated  // <character>.bvh at the display rate
+  bool exportBvh(const QString& directory, QString* error);  // <character>.bvh at the display rate
+  bool exportGltf(const QString& path, QString* error);       // one .glb: every character, animated
   bool exportImageSequence(const QString& directory, QString* error);  // frame_0000.png ...
 
   // Autosave: the file the current document autosaves to, writing it, and the recovery check.
   QString autosavePath() const;
   bool writeAutosave();
   static QStringList pendingRecoveries();
+  // Opens the scene autosaved in `file` by a session that did not close cleanly, as a modified
+  // document without a file (Save asks where). The prompt at start-up calls it.
+  bool recoverAutosave(const QString& file, QString* error);
 
  protected:
   void closeEvent(QCloseEvent* e) override;
