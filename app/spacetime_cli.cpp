@@ -79,5 +79,9 @@ int main(int argc, char** argv) {
                summary.converged ? "converged" : "NOT converged", summary.reason.c_str(),
                summary.objective, summary.maxViolation, summary.iterations, summary.solveSeconds,
                validity.maxUnactuatedResidualDense, validity.maxForwardSimulationError);
+  for (const FlightCheck& f : validity.flights)
+    if (f.diverged)
+      std::fprintf(stderr, "  forward simulation of %s's flight %.3g-%.3g s diverges at %.3g s\n",
+                   f.character.c_str(), f.start, f.end, f.divergenceTime);
   return summary.converged ? 0 : 3;
 }

@@ -67,8 +67,11 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
                        {"start", f.start},
                        {"end", f.end},
                        {"max_position_error", f.maxPositionError},
+                       {"diverged", f.diverged},
+                       {"divergence_time", f.diverged ? json(f.divergenceTime) : json(nullptr)},
                        {"max_root_lift", f.maxRootLift}});
   val["flights"] = flights;
+  val["forward_simulation_diverged"] = v.forwardSimulationDiverged;
   json impacts = json::array();
   for (const ImpactCheck& i : v.impacts)
     impacts.push_back({{"contact", i.contact},

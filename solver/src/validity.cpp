@@ -21,8 +21,11 @@ double unactuatedResidual(const SpacetimeProblem& problem, int c, double t) {
 }
 
 // Integrates q'' = ABA(q, q', tau_actuated(t)) with classical RK4 from the solution's state at
-// t0, and returns the largest deviation from the solution's q over [t0, t1].
-double forwardSimulationError(const SpacetimeProblem& problem, int c, double t0, double t1) {
+// t0 and records in `check` the largest deviation from the solution's q over [t0, t1]. An
+// open-loop simulation of an inconsistent motion can blow up (to 1e104 on a 3D lamp): it stops
+// at the first step that leaves the solution by more than FlightCheck::kDivergence or is not
+// finite, and says when.
+void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1, FlightCheck& check) {
   const Model<double>& model = *problem.characters()[c].model;
   const int n = model.dofCount();
   Data<double> data(model);
@@ -39,7 +42,7 @@ double forwardSimulationError(const SpacetimeProblem& problem, int c, double t0,
   const int steps = std::max(10, static_cast<int>(std::ceil((t1 - t0) / 5e-4)));
   const double h = (t1 - t0) / steps;
   Eigen::VectorXd q = problem.jointState(c, t0, 0), qd = problem.jointState(c, t0, 1);
-  double worst = 0;
+  check.maxPositionError = 0;
   for (int s = 0; s < steps; ++s) {
     const double t = t0 + s * h;
     const Eigen::VectorXd k1v = qd, k1a = accel(t, q, qd);
@@ -48,9 +51,14 @@ double forwardSimulationError(const SpacetimeProblem& problem, int c, double t0,
     const Eigen::VectorXd k4v = qd + h * k3a, k4a = accel(t + h, q + h * k3v, k4v);
     q += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
     qd += h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
-    worst = std::max(worst, (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff());
+    const double error = (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff();
+    if (!std::isfinite(error) || !qd.allFinite() || error > FlightCheck::kDivergence) {
+      check.diverged = true;
+      check.divergenceTime = t + h;
+      return;
+    }
+    check.maxPositionError = std::max(check.maxPositionError, error);
   }
-  return worst;
 }
 
 ImpactCheck checkImpact(const SpacetimeProblem& problem, int j) {
@@ -217,7 +225,8 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       fc.character = model.name;
       fc.start = a;
       fc.end = b;
-      fc.maxPositionError = forwardSimulationError(problem, static_cast<int>(c), a, b);
+      simulateFlight(problem, static_cast<int>(c), a, b, fc);
+      r.forwardSimulationDiverged = r.forwardSimulationDiverged || fc.diverged;
       for (double s : dense) {
         if (s < a || s > b) continue;
         const Eigen::VectorXd q = problem.jointState(static_cast<int>(c), s, 0);

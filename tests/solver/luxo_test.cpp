@@ -9,6 +9,7 @@
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
+#include "solver/outputs.h"
 #include "solver/validity.h"
 
 namespace spacetime {
@@ -51,6 +52,29 @@ TEST_P(LuxoSamples, FreeFallIsAProjectile) {
     EXPECT_NEAR(q[1], -0.5 * 9.81 * t * t, 2e-3) << t;  // base_y
     EXPECT_NEAR(q[3], 0.4, 2e-2) << t;                    // j1 barely moves
   }
+}
+
+// An open-loop simulation of a motion that breaks the dynamics blows up; the validity report says
+// so, and when, instead of printing an astronomic error: wild variables (root breakpoints tens
+// of metres apart) send the simulated lamp away from the "solution" within the flight.
+TEST(LuxoValidity, FlagsADivergingForwardSimulation) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(luxoScene(), &error);
+  ASSERT_TRUE(problem) << error;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 50.0);
+  for (double& x : problem->variables()) x += noise(rng);
+  const ValidityReport v = checkValidity(*problem);
+  ASSERT_FALSE(v.flights.empty());
+  EXPECT_TRUE(v.forwardSimulationDiverged);
+  for (const FlightCheck& f : v.flights) {
+    if (!f.diverged) continue;
+    EXPECT_GE(f.divergenceTime, f.start);
+    EXPECT_LE(f.divergenceTime, f.end);
+    EXPECT_LE(f.maxPositionError, FlightCheck::kDivergence);  // the deviation up to then, finite
+  }
+  const std::string summary = summaryJson(SolverSummary(), v, *problem);
+  EXPECT_NE(summary.find("\"forward_simulation_diverged\": true"), std::string::npos) << summary;
 }
 
 // The root's curves at random variables: velocity and acceleration are the time derivatives
@@ -106,6 +130,7 @@ TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
   EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);
   ASSERT_EQ(v.flights.size(), 1u);
   EXPECT_GE(v.flights[0].maxRootLift, 0.05);
+  EXPECT_FALSE(v.flights[0].diverged);  // the open-loop simulation stays finite (error 5.2 today)
   EXPECT_LT(v.maxRestSpeed, 1e-6);
   EXPECT_TRUE(v.contactsPushOnly);
   EXPECT_TRUE(v.contactsInFrictionCone);

@@ -21,6 +21,11 @@ struct FlightCheck {
   double start = 0, end = 0;
   double maxPositionError = 0;  // max |q_sim - q_solution| over the phase (m or rad)
   double maxRootLift = 0;       // highest the lowest contact point of the root rises (m)
+  // The simulation left the solution by more than kDivergence (or stopped being finite) at
+  // divergenceTime; maxPositionError is then the deviation up to that instant.
+  bool diverged = false;
+  double divergenceTime = 0;
+  static constexpr double kDivergence = 100;  // m or rad: far beyond any error of a valid motion
 };
 
 // A touch-down with an impact, checked with the CRBA mass matrix and the contact Jacobian
@@ -52,6 +57,7 @@ struct ValidityReport {
   std::vector<FlightCheck> flights;
   std::vector<ImpactCheck> impacts;
   double maxForwardSimulationError = 0;
+  bool forwardSimulationDiverged = false;  // some flight's simulation diverged (see FlightCheck)
   bool contactsPushOnly = true;
   bool contactsInFrictionCone = true;
 };
