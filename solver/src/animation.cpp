@@ -34,10 +34,18 @@ Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, doub
 }
 
 Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {
-  Animation anim;
   const Scene& scene = problem.scene();
   const int frames =
       std::max(2, static_cast<int>(std::lround((scene.endTime - scene.startTime) * rateHz)) + 1);
+  std::vector<double> times;
+  for (int f = 0; f < frames; ++f) times.push_back(scene.startTime + (scene.endTime - scene.startTime) * f / (frames - 1));
+  return sampleAnimationAt(problem, times);
+}
+
+Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<double>& times) {
+  Animation anim;
+  const Scene& scene = problem.scene();
+  const int frames = static_cast<int>(times.size());
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const int ci = static_cast<int>(c);
     const Model<double>& model = *problem.characters()[c].model;
@@ -69,7 +77,7 @@ Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {
     }
     Data<double> data(model);
     for (int f = 0; f < frames; ++f) {
-      const double t = scene.startTime + (scene.endTime - scene.startTime) * f / (frames - 1);
+      const double t = times[f];
       ca.times.push_back(t);
       ca.q.row(f) = problem.jointState(ci, t, 0).transpose();
       ca.qd.row(f) = problem.jointState(ci, t, 1).transpose();

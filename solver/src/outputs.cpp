@@ -72,6 +72,14 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
                        {"max_root_lift", f.maxRootLift}});
   val["flights"] = flights;
   val["forward_simulation_diverged"] = v.forwardSimulationDiverged;
+  json formulas = json::array();
+  for (const FormulaCheck& f : v.formulas) {
+    json jf = {{"term", f.term}, {"max_violation", f.maxViolation}, {"worst_time", f.worstTime}};
+    if (!f.error.empty()) jf["error"] = f.error;
+    formulas.push_back(jf);
+  }
+  val["formulas"] = formulas;
+  val["max_formula_violation"] = v.maxFormulaViolation;
   json impacts = json::array();
   for (const ImpactCheck& i : v.impacts)
     impacts.push_back({{"contact", i.contact},

@@ -7,6 +7,7 @@
 #include "dynamics/algorithms.h"
 #include "dynamics/contact_points.h"
 #include "solver/animation.h"
+#include "solver/formula_series.h"
 
 namespace spacetime {
 namespace {
@@ -211,6 +212,38 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       r.maxConeViolation = std::max(r.maxConeViolation, (std::hypot(l.x(), l.z()) - ct.friction * l.y()) / scale);
   }
   r.contactsInFrictionCone = r.maxConeViolation <= 1e-6;  // fraction of weight, as above
+  // Formula constraints, evaluated by the same formula language the graph widget plots with.
+  for (const TermSpec& term : scene.terms) {
+    if (term.kind != TermKind::Formula) continue;
+    const CharacterSpec* spec = scene.character(term.character);
+    if (!spec) continue;
+    const int c = static_cast<int>(spec - scene.characters.data());
+    std::vector<double> times;
+    if (term.interval) {
+      for (double t : dense)
+        if (t >= term.start - 1e-12 && t <= term.end + 1e-12) times.push_back(t);
+    } else {
+      times.push_back(term.time);
+    }
+    if (times.empty()) continue;
+    FormulaCheck check;
+    check.term = term.id;
+    const FormulaSeries series =
+        evaluateFormulaSeries(scene, sampleAnimationAt(problem, times).characters[c], term.expression);
+    check.error = series.error;
+    for (size_t k = 0; k < series.values.size(); ++k) {
+      const double gap = series.values[k] - term.value;
+      const double violation = term.relation == '<' ? std::max(0.0, gap)
+                               : term.relation == '>' ? std::max(0.0, -gap)
+                                                      : std::abs(gap);
+      if (violation > check.maxViolation) {
+        check.maxViolation = violation;
+        check.worstTime = times[k];
+      }
+    }
+    r.maxFormulaViolation = std::max(r.maxFormulaViolation, check.maxViolation);
+    r.formulas.push_back(check);
+  }
   // Flight phases of every character that has contacts.
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     std::vector<const ContactVariables*> mine;

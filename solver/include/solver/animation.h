@@ -39,6 +39,8 @@ struct Animation {
 
 // Samples the problem's current solution at `rateHz` frames per second (both ends included).
 Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz);
+// The same at the given times (the validity report's checks at chosen instants).
+Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<double>& times);
 
 // The generalized forces of character c at time t from the solution's motion and contact
 // forces (RNEA with the contacts as external point forces).

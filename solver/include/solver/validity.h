@@ -5,8 +5,8 @@
 // the largest unactuated generalized force (as a fraction of the character's weight), pin
 // errors, contact slip and penetration, contact forces' sign and friction, clearance, rest at
 // the rest terms, and - the independent check - the error of forward-simulating the solved
-// actuated torques with the articulated-body algorithm over each flight phase, and the impulse
-// balance of every touch-down.
+// actuated torques with the articulated-body algorithm over each flight phase, the impulse
+// balance of every touch-down, and every formula constraint.
 #pragma once
 
 #include <string>
@@ -41,6 +41,15 @@ struct ImpactCheck {
   double maxJointImpulse = 0;   // largest impulsive joint torque, N m s
 };
 
+// A formula constraint (`expression relation value`) re-evaluated on the motion: at its time,
+// or at every dense-grid instant of its interval.
+struct FormulaCheck {
+  std::string term;
+  double maxViolation = 0;  // |f - v| for =, max(0, f - v) for <=, max(0, v - f) for >=
+  double worstTime = 0;
+  std::string error;        // the formula no longer applies to the character (not expected)
+};
+
 struct ValidityReport {
   int denseFactor = 10;
   double maxUnactuatedResidualSamples = 0;  // fraction of weight, at the collocation samples
@@ -56,6 +65,8 @@ struct ValidityReport {
   double maxRestSpeed = 0;                  // largest |qd| at the rest terms
   std::vector<FlightCheck> flights;
   std::vector<ImpactCheck> impacts;
+  std::vector<FormulaCheck> formulas;
+  double maxFormulaViolation = 0;
   double maxForwardSimulationError = 0;
   bool forwardSimulationDiverged = false;  // some flight's simulation diverged (see FlightCheck)
   bool contactsPushOnly = true;
