@@ -18,14 +18,28 @@ namespace {
 
 Scene luxoScene(const std::string& name = "luxo_jump.json") { return testing::shippedScene(name); }
 
-std::unique_ptr<SpacetimeProblem> solved(const Scene& scene, SolverSummary* summary) {
+std::unique_ptr<SpacetimeProblem> solved(const Scene& scene, SolverSummary* summary, int threads = 1) {
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
   EXPECT_TRUE(problem) << error;
   SolverOptions options;
   options.maxOuterIterations = scene.solver.maxOuterIterations;
+  options.threads = threads;
   *summary = solveSpacetime(*problem, options);
   return problem;
+}
+
+// A solved jump, checked at the samples: converged, physics exact there, the base lifts 5 cm,
+// the contacts push and stay in their cones. Returns the validity report for further checks.
+ValidityReport expectJumpAtTheSamples(const SpacetimeProblem& problem, const SolverSummary& s) {
+  EXPECT_TRUE(s.converged) << s.reason << " worst " << s.worstConstraint;
+  const ValidityReport v = checkValidity(problem);
+  EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);
+  EXPECT_EQ(v.flights.size(), 1u);
+  if (!v.flights.empty()) EXPECT_GE(v.flights[0].maxRootLift, 0.05);
+  EXPECT_TRUE(v.contactsPushOnly);
+  EXPECT_TRUE(v.contactsInFrictionCone);
+  return v;
 }
 
 // Released at rest with no contact, the optimum keeps the joints still (no torque needed in
@@ -118,23 +132,12 @@ TEST_P(LuxoSamples, RootCurvesAreConsistentAndC1) {
 INSTANTIATE_TEST_SUITE_P(RootDegree, LuxoSamples, ::testing::Values(2, 3, 4));
 
 TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
-  const Scene scene = luxoScene();
-  std::string error;
-  auto problem = SpacetimeProblem::build(scene, &error);
-  ASSERT_TRUE(problem) << error;
-  SolverOptions options;
-  options.maxOuterIterations = scene.solver.maxOuterIterations;
-  options.threads = 2;
-  const SolverSummary s = solveSpacetime(*problem, options);
-  EXPECT_TRUE(s.converged) << s.reason << " worst " << s.worstConstraint;
-  const ValidityReport v = checkValidity(*problem);
-  EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);
+  SolverSummary s;
+  const auto problem = solved(luxoScene(), &s, 2);
+  const ValidityReport v = expectJumpAtTheSamples(*problem, s);
   ASSERT_EQ(v.flights.size(), 1u);
-  EXPECT_GE(v.flights[0].maxRootLift, 0.05);
   EXPECT_FALSE(v.flights[0].diverged);  // the open-loop simulation stays finite (error 5.2 today)
   EXPECT_LT(v.maxRestSpeed, 1e-6);
-  EXPECT_TRUE(v.contactsPushOnly);
-  EXPECT_TRUE(v.contactsInFrictionCone);
   EXPECT_LT(v.maxContactSlip, 1e-6);
   EXPECT_LT(v.maxClearanceViolation, 1e-3);
   // The landing is an impact, checked with CRBA (not the RNEA the solver differentiates): the
@@ -158,21 +161,9 @@ TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
 // head's height - re-checked by the validity report's formula evaluation and by our forward
 // kinematics - meets the constraint.
 TEST(Luxo, PowerFormulaSceneSolves) {
-  const Scene scene = luxoScene("luxo_power_formula.json");
-  std::string error;
-  auto problem = SpacetimeProblem::build(scene, &error);
-  ASSERT_TRUE(problem) << error;
-  SolverOptions options;
-  options.maxOuterIterations = scene.solver.maxOuterIterations;
-  options.threads = 2;
-  const SolverSummary s = solveSpacetime(*problem, options);
-  EXPECT_TRUE(s.converged) << s.reason << " worst " << s.worstConstraint;
-  const ValidityReport v = checkValidity(*problem);
-  EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);
-  ASSERT_EQ(v.flights.size(), 1u);
-  EXPECT_GE(v.flights[0].maxRootLift, 0.05);
-  EXPECT_TRUE(v.contactsPushOnly);
-  EXPECT_TRUE(v.contactsInFrictionCone);
+  SolverSummary s;
+  const auto problem = solved(luxoScene("luxo_power_formula.json"), &s, 2);
+  const ValidityReport v = expectJumpAtTheSamples(*problem, s);
   ASSERT_EQ(v.formulas.size(), 1u);
   EXPECT_EQ(v.formulas[0].term, "head_high");
   EXPECT_LT(v.maxFormulaViolation, 1e-5);
