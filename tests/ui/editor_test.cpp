@@ -20,6 +20,7 @@
 #include "core/scene_io.h"
 #include "ui/main_window.h"
 #include "ui/render_scene.h"
+#include "event_loop_gap.h"
 
 using namespace spacetime;
 using namespace spacetime::ui;
@@ -290,47 +291,33 @@ class EditorTest : public QObject {
     QVERIFY(!QFile::exists(w.autosavePath()));
   }
 
-  // The longest the event loop waited during the first 4 s of a Luxo solve, and the number of
-  // iterates that reached the interface. With `shown`, the window is on screen and the timeline
-  // plays, so every iterate and every frame is drawn.
-  static std::pair<qint64, int> eventLoopStallDuringLuxoSolve(bool shown) {
+  // The longest event-loop gap in the first 4 s of a Luxo solve from the default guess, and the
+  // iterates that reached the interface.
+  static EventLoopGap luxoSolveGap(WindowMode mode) {
     MainWindow w;
-    if (!openLuxo(w, shown ? std::optional<QSize>(QSize(1400, 900)) : std::nullopt)) return {-1, 0};
-    if (shown) w.timeline()->play();
-    int iterates = 0;
-    QObject::connect(w.solverJob(), &SolverJob::iterate, &w, [&] { ++iterates; });
-    w.solve();
-    QElapsedTimer clock, sinceTick;
-    clock.start();
-    sinceTick.start();
-    qint64 worst = 0;
-    QTimer timer;
-    timer.setInterval(5);
-    QObject::connect(&timer, &QTimer::timeout, [&] { worst = std::max(worst, sinceTick.restart()); });
-    timer.start();
-    while (clock.elapsed() < 4000 && w.solverJob()->isRunning()) QTest::qWait(20);
-    timer.stop();
-    w.stopSolve();
-    w.solverJob()->waitForFinished(30000);
-    return {worst, iterates};
+    if (!openLuxo(w, mode == WindowMode::Hidden ? std::nullopt : std::optional<QSize>(QSize(1400, 900)))) return {};
+    return eventLoopGapDuringSolve(w, mode);
   }
 
   void luxoSolveKeepsTheEventLoopResponsive() {
-    // The solver job itself: the solve runs on a worker thread and hands iterates over
-    // latest-wins, so the interface thread only swaps a pointer and recomputes the plots.
-    const auto [worst, iterates] = eventLoopStallDuringLuxoSolve(false);
-    qInfo("window hidden: longest event-loop gap %lld ms, %d iterates delivered", worst, iterates);
-    QVERIFY(iterates >= 3);  // live refinement: iterates reached the interface
-    // The target: no gap over 50 ms. With the window hidden the interface thread's own
-    // work is what is measured: 14-18 ms on this 2-core machine, also with a solver test running
-    // on the other core (session 5), so the target is asserted with that margin.
-    QVERIFY(worst >= 0);
-    QVERIFY2(worst <= 50, qPrintable(QString("event loop stalled %1 ms").arg(worst)));
-    // With the window shown and the timeline playing, every frame is composited by Mesa's
-    // software renderer: 50-79 ms measured, reported here and in docs/STATUS.md, not asserted.
-    const auto [shownWorst, shownIterates] = eventLoopStallDuringLuxoSolve(true);
-    qInfo("window shown and playing: longest event-loop gap %lld ms, %d iterates drawn", shownWorst, shownIterates);
-    QVERIFY(shownIterates >= 3);
+    // The solve runs on a worker thread and hands iterates over latest-wins, so the interface
+    // thread only swaps a pointer, updates the plots and draws. The target: no gap over
+    // 50 ms. Hidden, the interface thread's own work is measured: 13-18 ms on this 2-core
+    // machine, also with a solver test loading the other core (session 5), so it is asserted.
+    // Shown, each repaint composites the whole window in Mesa's software renderer (~25 ms):
+    // 31-35 ms (every iterate drawn) and 37-43 ms (timeline playing too) on an idle machine, up
+    // to 100 ms when another process loads the second core - reported here and as medians by
+    // the editor benchmark, not asserted.
+    const EventLoopGap hidden = luxoSolveGap(WindowMode::Hidden);
+    qInfo("window hidden: longest event-loop gap %lld ms, %d iterates delivered", hidden.worstMs, hidden.iterates);
+    QVERIFY(hidden.iterates >= 3);  // live refinement: iterates reached the interface
+    QVERIFY2(hidden.worstMs >= 0 && hidden.worstMs <= 50, qPrintable(QString("event loop stalled %1 ms").arg(hidden.worstMs)));
+    const EventLoopGap shown = luxoSolveGap(WindowMode::Shown);
+    qInfo("window shown: longest event-loop gap %lld ms, %d iterates drawn", shown.worstMs, shown.iterates);
+    QVERIFY(shown.iterates >= 3);
+    const EventLoopGap playing = luxoSolveGap(WindowMode::ShownPlaying);
+    qInfo("window shown and playing: longest event-loop gap %lld ms, %d iterates drawn", playing.worstMs, playing.iterates);
+    QVERIFY(playing.iterates >= 3);
   }
 
   void stopLeavesAConsistentDocument() {
