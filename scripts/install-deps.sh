@@ -25,5 +25,8 @@ validator_dir="$(cd "$(dirname "$0")/.." && pwd)/.cache/gltf-validator"
 if ! grep -qs "\"version\": \"$validator_version\"" "$validator_dir/node_modules/gltf-validator/package.json"; then
   echo "installing the Khronos glTF Validator $validator_version (npm) into $validator_dir"
   mkdir -p "$validator_dir"
-  npm install --silent --no-save --no-audit --no-fund --prefix "$validator_dir" "gltf-validator@$validator_version"
+  # Only the tests need it: without the npm registry the editor still builds and runs, and the
+  # validator test says what is missing.
+  npm install --silent --no-save --no-audit --no-fund --prefix "$validator_dir" "gltf-validator@$validator_version" ||
+    echo "warning: could not install the glTF Validator; GltfValidator.AcceptsEveryShippedScene will fail" >&2
 fi

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Quick start: install what is missing, build (Release), and open the editor on the Luxo jump,
 # which solves as it opens. Without a display (no $DISPLAY or $WAYLAND_DISPLAY) it solves the
-# Luxo jump headless instead, writing summary.json, motion.json and luxo.urdf to out/luxo_jump/.
+# Luxo jump headless instead, writing summary.json, motion.json, motion.glb, luxo.urdf and
+# luxo.bvh to out/luxo_jump/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
