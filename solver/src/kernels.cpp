@@ -276,20 +276,22 @@ SPACETIME_DEFINE_EVALUATORS(FrictionConeKernel)
 
 // --- ImpactKernel ------------------------------------------------------------------------
 
-ImpactKernel::ImpactKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
+ImpactKernel::ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
                            int forceDims, double impulseScale, double torqueWeight,
                            std::string label)
-    : model_(std::move(model)), contact_(contact), forceDims_(forceDims),
+    : model_(std::move(model)), contacts_(std::move(contacts)), forceDims_(forceDims),
       impulseScale_(impulseScale), sqrtTorqueWeight_(std::sqrt(torqueWeight)) {
   label_ = std::move(label);
   const int n = model_->dofCount();
-  inputs_ = 4 * n + forceDims_ * static_cast<int>(contact_.points.size());
+  size_t points = 0;
+  for (const ContactPoints& c : contacts_) points += c.points.size();
+  inputs_ = 4 * n + forceDims_ * static_cast<int>(points);
   for (int d = 0; d < n; ++d)
     (model_->bodies[model_->dofBody[d]].actuated ? actuated_ : unactuated_).push_back(d);
   parts_.insert(parts_.end(), unactuated_.size(), Part::Continuity);
   parts_.insert(parts_.end(), unactuated_.size(), Part::Balance);
   parts_.insert(parts_.end(), actuated_.size(), Part::JointImpulse);
-  parts_.insert(parts_.end(), forceDims_ * contact_.points.size(), Part::PostVelocity);
+  parts_.insert(parts_.end(), forceDims_ * points, Part::PostVelocity);
   for (Part p : parts_)
     kinds_.push_back(p == Part::JointImpulse ? RowKind::Objective : RowKind::Equality);
 }
@@ -298,24 +300,24 @@ template <class T>
 void ImpactKernel::compute(const T* z, T* rows) const {
   const int n = model_->dofCount();
   const T *qMinus = z, *qPlus = z + n, *qdMinus = z + 2 * n, *qdPlus = z + 3 * n;
-  // M (qd+ - qd-) - J^T L is the RNEA of the velocity jump as an acceleration, with no velocity
-  // and no gravity (RBDA eq. 11.58); the configuration is the one before the impact.
+  // M (qd+ - qd-) - sum J^T L is the RNEA of the velocity jump as an acceleration, with no
+  // velocity and no gravity (RBDA eq. 11.58); the configuration is the one before the impact.
   VecX<T> jump(n);
   for (int d = 0; d < n; ++d) jump[d] = qdPlus[d] - qdMinus[d];
   Data<T> data(*model_);
   const T* none = nullptr;
   const VecX<T> impulse =
-      rnea(*model_, data, qMinus, none, jump.data(),
-           contactPointForces(std::vector<ContactPoints>{contact_}, z + 4 * n, forceDims_), false);
+      rnea(*model_, data, qMinus, none, jump.data(), contactPointForces(contacts_, z + 4 * n, forceDims_), false);
   int r = 0;
   for (int d : unactuated_) rows[r++] = qPlus[d] - qMinus[d];
   for (int d : unactuated_) rows[r++] = impulse[d] * impulseScale_;
   for (int d : actuated_) rows[r++] = impulse[d] * sqrtTorqueWeight_;
   forwardKinematics(*model_, data, qPlus, qdPlus, none);
-  for (const Eigen::Vector3d& p : contact_.points) {
-    const Vec3<T> v = pointVelocity(data, contact_.body, p);
-    for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
-  }
+  for (const ContactPoints& c : contacts_)
+    for (const Eigen::Vector3d& p : c.points) {
+      const Vec3<T> v = pointVelocity(data, c.body, p);
+      for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
+    }
 }
 SPACETIME_DEFINE_EVALUATORS(ImpactKernel)
 

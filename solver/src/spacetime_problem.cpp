@@ -430,25 +430,46 @@ bool SpacetimeProblem::assemble(std::string* error) {
   return addFormulaTerms(error);
 }
 
+std::vector<int> SpacetimeProblem::simultaneousImpacts(int j) const {
+  std::vector<int> group;
+  const ContactVariables& ct = contacts_[j];
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    const ContactVariables& other = contacts_[k];
+    if (other.impact() && other.character == ct.character && std::abs(other.start - ct.start) < kTimeTolerance)
+      group.push_back(static_cast<int>(k));
+  }
+  return group;
+}
+
 void SpacetimeProblem::addImpactTerms(int j) {
   const ContactVariables& ct = contacts_[j];
   const CharacterVariables& cv = characters_[ct.character];
   const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
   const double t = ct.start;
+  const std::vector<int> group = simultaneousImpacts(j);
   // Impulses are measured as the weight acting over one knot interval, and an impulsive joint
   // torque costs what the same torque impulse spread over one knot interval would cost in the
   // effort integral (tau^2 h = (impulse / h)^2 h).
   const double h = transcription_.motion.knotSpacing();
   const double impulseScale = 1.0 / (cv.weight * h);
-  InputMap in;
-  addMotionInputs(in, ct.character, t, 0, /*before=*/true);
-  addMotionInputs(in, ct.character, t, 0);
-  addMotionInputs(in, ct.character, t, 1, /*before=*/true);
-  addMotionInputs(in, ct.character, t, 1);
-  addBlockInputs(in, ct.impulseOffset, ct.blockSize());
-  addResidual(std::make_shared<ImpactKernel>(cv.model, ct.points, ct.forceDims, impulseScale,
-                                             scene_.objective.effort / h, at(label + " impact", t)),
-              in);
+  // One velocity jump for every contact touching down now: the first of them adds it.
+  if (group.front() == j) {
+    InputMap in;
+    addMotionInputs(in, ct.character, t, 0, /*before=*/true);
+    addMotionInputs(in, ct.character, t, 0);
+    addMotionInputs(in, ct.character, t, 1, /*before=*/true);
+    addMotionInputs(in, ct.character, t, 1);
+    std::vector<ContactPoints> points;
+    std::string names = label;
+    for (int k : group) {
+      addBlockInputs(in, contacts_[k].impulseOffset, contacts_[k].blockSize());
+      points.push_back(contacts_[k].points);
+      if (k != j) names += " and '" + scene_.terms[contacts_[k].term].id + "'";
+    }
+    addResidual(std::make_shared<ImpactKernel>(cv.model, points, ct.forceDims, impulseScale,
+                                               scene_.objective.effort / h, at(names + " impact", t)),
+                in);
+  }
   InputMap imp;
   addBlockInputs(imp, ct.impulseOffset, ct.blockSize());
   const int points = static_cast<int>(ct.points.points.size());

@@ -79,10 +79,14 @@ ImpactCheck checkImpact(const SpacetimeProblem& problem, int j) {
   // J^T L: the generalized force of the points' impulses is the RNEA of those point forces
   // alone (no motion, no gravity), with the opposite sign.
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
-  balance += rnea(model, data, q.data(), zero.data(), zero.data(),
-                  contactPointForces(std::vector<ContactPoints>{ct.points},
-                                     problem.variables().data() + ct.impulseOffset, ct.forceDims),
-                  false);
+  // Every contact touching down at the same instant shares the velocity jump.
+  for (int k : problem.simultaneousImpacts(j)) {
+    const ContactVariables& other = problem.contacts()[k];
+    balance += rnea(model, data, q.data(), zero.data(), zero.data(),
+                    contactPointForces(std::vector<ContactPoints>{other.points},
+                                       problem.variables().data() + other.impulseOffset, other.forceDims),
+                    false);
+  }
   const std::vector<Eigen::Vector3d> impulses = problem.contactImpulses(j);
   ic.minNormalImpulse = 1e300;
   for (const Eigen::Vector3d& l : impulses) {

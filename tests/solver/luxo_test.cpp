@@ -7,6 +7,7 @@
 #include <random>
 
 #include "../shipped_scene.h"
+#include "split_landing.h"
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
 #include "solver/augmented_lagrangian.h"
@@ -153,6 +154,24 @@ TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
   EXPECT_LT(landing.maxSpeedAfter, 1e-6);
   std::printf("landing: %.3f m/s before, normal impulse >= %.3f N s, joint impulse %.4f N m s\n",
               landing.speedBefore, landing.minNormalImpulse, landing.maxJointImpulse);
+}
+
+// Heel and toe as two contact terms touching down at the same instant: one velocity jump that
+// both ground impulses produce together (M dqd = J_heel^T L_heel + J_toe^T L_toe, re-checked with
+// CRBA), each pushing, and both points at rest right after. Two separate impact balances would
+// each have to stop the whole lamp alone.
+TEST(Luxo, SimultaneousTouchDownsShareOneImpact) {
+  SolverSummary s;
+  const auto problem = solved(testing::withSplitLanding(luxoScene()), &s, 2);
+  const ValidityReport v = expectJumpAtTheSamples(*problem, s);
+  ASSERT_EQ(v.impacts.size(), 2u);
+  for (const ImpactCheck& landing : v.impacts) {
+    EXPECT_GT(landing.speedBefore, 0.1) << landing.contact;
+    EXPECT_GT(landing.minNormalImpulse, 0.0) << landing.contact;
+    EXPECT_LT(landing.maxBalanceError, 1e-6) << landing.contact;
+    EXPECT_LT(landing.maxSpeedAfter, 1e-6) << landing.contact;
+  }
+  std::printf("split landing: objective %.6g after %d iterations (one landing term: 134.5)\n", s.objective, s.iterations);
 }
 
 // The expression issue's scene: the jump minimising the integral of power^2 (three formula

@@ -161,18 +161,19 @@ class FrictionConeKernel : public Kernel {
   double mu_, scale_;
 };
 
-// A contact that begins in flight: a rigid impact at the touch-down instant (Featherstone RBDA
+// Contacts that begin in flight: a rigid impact at the touch-down instant (Featherstone RBDA
 // section 11.6; Witkin & Kass' spacetime with an instantaneous collision). Velocities jump, the
-// configuration does not: M(q) (qd+ - qd-) = J(q)^T L, with L the ground impulse of the contact
-// points, and the contact points are at rest just after. z = [q-, q+, qd-, qd+, L] (L: forceDims
-// per point, world axes). Rows: q+ - q- for the unactuated dofs (equalities: the root does not
+// configuration does not: M(q) (qd+ - qd-) = sum_c J_c(q)^T L_c, with L_c the ground impulses of
+// the points of every contact of the character touching down at that instant (two feet landing
+// together share one velocity jump), and those points are at rest just after.
+// z = [q-, q+, qd-, qd+, L_1, ..., L_k] (L_c: forceDims per point, world axes). Rows: q+ - q- for the unactuated dofs (equalities: the root does not
 // teleport); the unactuated rows of M (qd+ - qd-) - J^T L times impulseScale (equalities: the
 // impulse alone stops the root); the actuated rows - the impulsive joint torques that keep the
 // joints' velocities continuous (the joints' splines are C2) - times sqrt(torqueWeight)
 // (objective); the contact points' velocities after the jump (equalities, forceDims per point).
 class ImpactKernel : public Kernel {
  public:
-  ImpactKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
+  ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
                int forceDims, double impulseScale, double torqueWeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
   // The rows' parts: root continuity, root impulse balance, impulsive joint torques, and the
@@ -182,7 +183,7 @@ class ImpactKernel : public Kernel {
 
  private:
   std::shared_ptr<const Model<double>> model_;
-  ContactPoints contact_;
+  std::vector<ContactPoints> contacts_;
   int forceDims_;
   double impulseScale_, sqrtTorqueWeight_;
   std::vector<int> unactuated_, actuated_;

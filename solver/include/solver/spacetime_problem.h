@@ -134,6 +134,9 @@ class SpacetimeProblem {
   Eigen::VectorXd jointStateBefore(int character, double t, int order) const;
   // World force of each point of a contact at time t (zero outside its interval).
   std::vector<Eigen::Vector3d> contactForces(int contact, double t) const;
+  // The contacts of the same character that touch down with an impact at the same instant as
+  // contact j (j included, in contact order): they share one velocity jump.
+  std::vector<int> simultaneousImpacts(int j) const;
   // World impulse of each point of a contact at its touch-down (empty without an impact).
   std::vector<Eigen::Vector3d> contactImpulses(int contact) const;
 
