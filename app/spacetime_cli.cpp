@@ -5,6 +5,7 @@
 // Writes DIR/summary.json, DIR/motion.json and DIR/<character>.urdf. Progress (iteration,
 // objective, violation) goes to stderr unless --quiet. Bad input exits with status 2 and a
 // one-line reason, before anything is written.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -79,9 +80,12 @@ int main(int argc, char** argv) {
                summary.converged ? "converged" : "NOT converged", summary.reason.c_str(),
                summary.objective, summary.maxViolation, summary.iterations, summary.solveSeconds,
                validity.maxUnactuatedResidualDense, validity.maxForwardSimulationError);
-  for (const FlightCheck& f : validity.flights)
-    if (f.diverged)
-      std::fprintf(stderr, "  forward simulation of %s's flight %.3g-%.3g s diverges at %.3g s\n",
-                   f.character.c_str(), f.start, f.end, f.divergenceTime);
+  const std::vector<ValidityCheck> checks = validityChecklist(validity);
+  std::string failing;
+  for (const ValidityCheck& c : checks)
+    if (!c.pass) failing += "\n    " + c.name + ": " + (c.unit.empty() && c.limit == 0 ? "no" : std::to_string(c.value) + " " + c.unit + " (limit " + std::to_string(c.limit) + ")");
+  const auto passing = std::count_if(checks.begin(), checks.end(), [](const ValidityCheck& c) { return c.pass; });
+  std::fprintf(stderr, "  validity: %zd of %zu checks pass%s\n", static_cast<std::ptrdiff_t>(passing), checks.size(),
+               failing.empty() ? "" : ("; failing:" + failing).c_str());
   return summary.converged ? 0 : 3;
 }

@@ -80,6 +80,15 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   }
   val["formulas"] = formulas;
   val["max_formula_violation"] = v.maxFormulaViolation;
+  // The same as a checklist with the limits people judge by (validityChecklist).
+  json checks = json::array();
+  bool valid = true;
+  for (const ValidityCheck& c : validityChecklist(v)) {
+    checks.push_back({{"check", c.name}, {"value", c.value}, {"limit", c.limit}, {"unit", c.unit}, {"pass", c.pass}});
+    valid = valid && c.pass;
+  }
+  val["checks"] = checks;
+  val["valid"] = valid;
   json impacts = json::array();
   for (const ImpactCheck& i : v.impacts)
     impacts.push_back({{"contact", i.contact},

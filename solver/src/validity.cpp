@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "dynamics/algorithms.h"
 #include "dynamics/contact_points.h"
@@ -278,6 +279,45 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
     }
   }
   return r;
+}
+
+std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
+  std::vector<ValidityCheck> out;
+  auto check = [&](std::string name, double value, double limit, std::string unit) {
+    out.push_back({std::move(name), value, limit, std::move(unit), value <= limit});
+  };
+  auto yes = [&](std::string name, bool ok) { out.push_back({std::move(name), ok ? 0.0 : 1.0, 0.0, "", ok}); };
+  check("unactuated residual at the samples", r.maxUnactuatedResidualSamples, 1e-6, "× weight");
+  check("unactuated residual on the dense grid (×" + std::to_string(r.denseFactor) + ")",
+        r.maxUnactuatedResidualDense, 0.01, "× weight");
+  check("pin error", r.maxPinError, 1e-4, "m");
+  check("contact slip", r.maxContactSlip, 1e-4, "m");
+  check("contact penetration", r.maxContactPenetration, 1e-4, "m");
+  yes("contacts only push", r.contactsPushOnly);
+  yes("contact forces in their friction cones", r.contactsInFrictionCone);
+  check("clearance violation (dense grid)", r.maxClearanceViolation, 1e-3, "m");
+  check("speed at the rest terms", r.maxRestSpeed, 1e-4, "m/s or rad/s");
+  for (const FormulaCheck& f : r.formulas)
+    check("formula '" + f.term + "'" + (f.error.empty() ? "" : " (" + f.error + ")"),
+          f.error.empty() ? f.maxViolation : 1e300, 1e-5, "");
+  for (const FlightCheck& f : r.flights) {
+    char span[64];
+    std::snprintf(span, sizeof span, "%.3g-%.3g s", f.start, f.end);
+    if (f.diverged) {
+      char when[64];
+      std::snprintf(when, sizeof when, " (diverges at %.3g s)", f.divergenceTime);
+      out.push_back({"forward simulation of " + f.character + "'s flight " + span + when,
+                     FlightCheck::kDivergence, 0.01, "m or rad", false});
+    } else {
+      check("forward simulation of " + f.character + "'s flight " + span, f.maxPositionError, 0.01, "m or rad");
+    }
+  }
+  for (const ImpactCheck& i : r.impacts) {
+    check("impact '" + i.contact + "': impulse balance", i.maxBalanceError, 1e-6, "N s");
+    check("impact '" + i.contact + "': speed after", i.maxSpeedAfter, 1e-4, "m/s");
+    yes("impact '" + i.contact + "': ground only pushes", i.minNormalImpulse >= 0);
+  }
+  return out;
 }
 
 }  // namespace spacetime

@@ -13,7 +13,7 @@ for f in summary.json motion.json motion.glb particle.urdf particle.bvh; do [ -s
 for key in '"formatVersion"' '"dofs"' '"actuated"' '"times"' '"q"' '"qd"' '"qdd"' '"tau"' '"contacts"' '"urdf"'; do
   grep -q "$key" "$tmp/good/motion.json" || fail "motion.json lacks $key"
 done
-for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_seconds"' '"max_violation"' '"validity"'; do
+for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_seconds"' '"max_violation"' '"validity"' '"valid": true' '"checks"'; do
   grep -q "$key" "$tmp/good/summary.json" || fail "summary.json lacks $key"
 done
 

@@ -341,10 +341,32 @@ class EditorTest : public QObject {
     QVERIFY(!motion->converged);
     QVERIFY(motion->animation.characters[0].q.allFinite());
     QVERIFY(w.statusText().contains("Stopped"));
+    // The stopped motion is checked too, and fails: physics does not hold yet.
+    QVERIFY(motion->validity);
+    QVERIFY2(w.validity()->verdict().contains("fail"), qPrintable(w.validity()->verdict()));
     // Solving again continues from where Stop left it.
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(300000));
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
+  }
+
+  // The validity panel shows the engine's checklist for the solved motion: before a solve it
+  // asks for one; the solved particle (exact physics, pins met) passes every check, one row per
+  // check with the report's values; after an edit it says the checks are of the solved scene.
+  void validityPanelChecksTheSolvedMotion() {
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/particle.json"));
+    QVERIFY2(w.validity()->verdict().contains("Solve"), qPrintable(w.validity()->verdict()));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(60000));
+    const auto motion = w.document()->motion();
+    QVERIFY(motion && motion->validity);
+    const std::vector<ValidityCheck> checks = validityChecklist(*motion->validity);
+    QCOMPARE(w.validity()->list()->topLevelItemCount(), static_cast<int>(checks.size()));
+    QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
+    QVERIFY(w.validity()->list()->topLevelItem(0)->text(0).contains("residual"));
+    w.document()->edit("Move pin", [](Scene& s) { s.terms.front().position.x() += 0.1; });
+    QVERIFY2(w.validity()->verdict().contains("scene changed"), qPrintable(w.validity()->verdict()));
   }
 
   void viewportDrawsTheLampInItsColours() {

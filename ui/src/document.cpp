@@ -49,6 +49,7 @@ void Document::reset(const Scene& scene, const QString& filePath) {
         problem && problem->restore({stored->variables, stored->multipliers, stored->rho})) {
       auto m = sampleMotion(*problem);
       m->solved = true;
+      m->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));
       m->converged = stored->converged;
       m->reason = "loaded with the scene";
       motion_ = m;

@@ -54,6 +54,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   QDockWidget* constraintsDock = dock(tr("Constraints"), "constraintsDock", constraints_, Qt::RightDockWidgetArea);
   QDockWidget* timelineDock = dock(tr("Timeline"), "timelineDock", timeline_, Qt::BottomDockWidgetArea);
   QDockWidget* graphDock = dock(tr("Graphs"), "graphDock", graphs_, Qt::BottomDockWidgetArea);
+  validity_ = new ValidityPanel(&doc_);
+  QDockWidget* validityDock = dock(tr("Validity"), "validityDock", validity_, Qt::RightDockWidgetArea);
+  tabifyDockWidget(constraintsDock, validityDock);
+  constraintsDock->raise();
   splitDockWidget(timelineDock, graphDock, Qt::Vertical);
   resizeDocks({builderDock, constraintsDock}, {300, 300}, Qt::Horizontal);
   resizeDocks({timelineDock, graphDock}, {100, 330}, Qt::Vertical);
@@ -62,7 +66,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   statusBar()->addPermanentWidget(progress_, 1);
 
   createActions();
-  for (QDockWidget* d : {builderDock, constraintsDock, timelineDock, graphDock})
+  for (QDockWidget* d : {builderDock, constraintsDock, validityDock, timelineDock, graphDock})
     findChild<QMenu*>("viewMenu")->addAction(d->toggleViewAction());
 
   connect(&job_, &SolverJob::iterate, this, [this](std::shared_ptr<const SolvedMotion> m) {

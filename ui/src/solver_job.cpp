@@ -124,6 +124,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->solved = true;
       final->converged = summary.converged;
       final->reason = summary.reason;
+      final->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));
       const int gen = run->generation;
       std::shared_ptr<const SolvedMotion> result = final;
       {

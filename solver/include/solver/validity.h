@@ -75,4 +75,17 @@ struct ValidityReport {
 
 ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = 10);
 
+// The report as a checklist for people: each check's value against its limit. The limits are
+// the engine issue's (1 % of weight on the dense grid, 1e-6 at the samples) and, where it names
+// none, tolerances well above the solver's and well below what an animator would see (0.1 mm,
+// 1 cm or 0.01 rad for a forward simulation, 1e-5 for formulas).
+struct ValidityCheck {
+  std::string name;   // what is checked, e.g. "unactuated residual, dense grid"
+  double value = 0;   // the measured value (1 or 0 for yes/no checks)
+  double limit = 0;   // pass when value <= limit
+  std::string unit;   // "× weight", "m", "N s", ... ("" for yes/no checks)
+  bool pass = true;
+};
+std::vector<ValidityCheck> validityChecklist(const ValidityReport& report);
+
 }  // namespace spacetime

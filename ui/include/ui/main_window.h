@@ -17,6 +17,7 @@
 #include "ui/constraints_panel.h"
 #include "ui/document.h"
 #include "ui/graph_panel.h"
+#include "ui/validity_panel.h"
 #include "ui/solver_job.h"
 #include "ui/timeline.h"
 #include "ui/viewport.h"
@@ -36,6 +37,7 @@ class MainWindow : public QMainWindow {
   BuilderPanel* builder() { return builder_; }
   ConstraintsPanel* constraints() { return constraints_; }
   GraphPanel* graphs() { return graphs_; }
+  ValidityPanel* validity() { return validity_; }
   QString statusText() const;
 
   bool openFile(const QString& path, QString* error);  // no prompt
@@ -87,6 +89,7 @@ class MainWindow : public QMainWindow {
   BuilderPanel* builder_;
   ConstraintsPanel* constraints_;
   GraphPanel* graphs_;
+  ValidityPanel* validity_;
   QLabel* progress_;
   QMenu* recentMenu_ = nullptr;
   QAction* solveAction_ = nullptr;

@@ -8,6 +8,7 @@
 
 #include "solver/animation.h"
 #include "solver/spacetime_problem.h"
+#include "solver/validity.h"
 
 namespace spacetime::ui {
 
@@ -25,6 +26,9 @@ struct SolvedMotion {
   bool solved = false;     // false: the initial guess, or an iterate still being refined
   bool converged = false;  // the final solve met its tolerance
   std::string reason;      // why the solve stopped (final motions)
+  // The validity report of a final or loaded solution (null for iterates and guesses): is the
+  // motion physical between the samples too?
+  std::shared_ptr<const ValidityReport> validity;
 };
 
 // Samples the problem's current variables.

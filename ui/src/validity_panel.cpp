@@ -1,0 +1,70 @@
+// The validity panel (see validity_panel.h).
+#include "ui/validity_panel.h"
+
+#include <QHeaderView>
+#include <QVBoxLayout>
+#include <algorithm>
+
+#include "core/scene_io.h"
+
+namespace spacetime::ui {
+
+ValidityPanel::ValidityPanel(Document* doc, QWidget* parent) : QWidget(parent), doc_(doc) {
+  setObjectName("validityPanel");
+  auto* layout = new QVBoxLayout(this);
+  layout->setContentsMargins(2, 2, 2, 2);
+  verdict_ = new QLabel;
+  verdict_->setWordWrap(true);
+  layout->addWidget(verdict_);
+  list_ = new QTreeWidget;
+  list_->setRootIsDecorated(false);
+  list_->setHeaderLabels({tr("Check"), tr("Value"), tr("Limit")});
+  // Check names are long and the dock is narrow: columns fit their contents and the list
+  // scrolls sideways; every row's tooltip says it in full.
+  list_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  list_->header()->setStretchLastSection(false);
+  layout->addWidget(list_, 1);
+  connect(doc_, &Document::motionChanged, this, &ValidityPanel::refresh);
+  connect(doc_, &Document::sceneChanged, this, &ValidityPanel::refresh);
+  refresh();
+}
+
+void ValidityPanel::refresh() {
+  list_->clear();
+  const std::shared_ptr<const SolvedMotion> motion = doc_->motion();
+  if (!motion || !motion->validity) {
+    verdict_->setText(motion && !motion->solved ? tr("Solving… the motion is checked when the solve ends.")
+                                                : tr("Solve to check the motion."));
+    return;
+  }
+  std::vector<ValidityCheck> checks = validityChecklist(*motion->validity);
+  // Failures first, the worst (furthest beyond its limit) on top.
+  auto excess = [](const ValidityCheck& c) { return c.limit > 0 ? c.value / c.limit : c.value; };
+  std::stable_sort(checks.begin(), checks.end(), [&](const ValidityCheck& a, const ValidityCheck& b) {
+    if (a.pass != b.pass) return !a.pass;
+    return !a.pass && excess(a) > excess(b);
+  });
+  int failing = 0;
+  for (const ValidityCheck& c : checks) {
+    const bool yesNo = c.unit.empty() && c.limit == 0;
+    auto* item = new QTreeWidgetItem(list_);
+    item->setText(0, QString::fromStdString(c.name));
+    item->setText(1, yesNo ? (c.pass ? tr("yes") : tr("no"))
+                           : QString("%1 %2").arg(c.value, 0, 'g', 3).arg(QString::fromStdString(c.unit)));
+    item->setText(2, yesNo ? QString() : QString("≤ %1").arg(c.limit, 0, 'g', 3));
+    item->setIcon(0, style()->standardIcon(c.pass ? QStyle::SP_DialogApplyButton : QStyle::SP_MessageBoxWarning));
+    item->setForeground(1, c.pass ? palette().text() : QBrush(QColor(200, 40, 30)));
+    for (int column = 0; column < 3; ++column)
+      item->setToolTip(column, QString("%1: %2 %3").arg(item->text(0), item->text(1), item->text(2)));
+    if (!c.pass) ++failing;
+  }
+  QString verdict = failing == 0 ? tr("Physically valid: all %1 checks pass.").arg(checks.size())
+                                 : tr("%1 of %2 checks fail: the motion is not physical between the samples "
+                                      "or does not meet its terms.").arg(failing).arg(checks.size());
+  // After an edit the motion on screen is still the last solve's, checked against its own scene.
+  if (motion->scene && sceneToJson(*motion->scene) != sceneToJson(doc_->scene()))
+    verdict = tr("The scene changed since this solve; these checks are of the solved scene. ") + verdict;
+  verdict_->setText(verdict);
+}
+
+}  // namespace spacetime::ui
