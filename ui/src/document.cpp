@@ -111,6 +111,14 @@ void Document::setMotion(std::shared_ptr<const SolvedMotion> motion) {
   emit motionChanged();
 }
 
+void Document::attachValidity(const SolvedMotion* motion, std::shared_ptr<const ValidityReport> report) {
+  if (!motion_ || motion_.get() != motion) return;
+  auto checked = std::make_shared<SolvedMotion>(*motion_);
+  checked->validity = std::move(report);
+  motion_ = std::move(checked);
+  emit validityChanged();
+}
+
 void Document::setCurrentTime(double t) {
   t = std::clamp(t, scene_.startTime, scene_.endTime);
   if (t == time_) return;

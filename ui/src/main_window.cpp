@@ -84,6 +84,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     solveAction_->setEnabled(true);
     stopAction_->setEnabled(false);
   });
+  connect(&job_, &SolverJob::validated, this,
+          [this](std::shared_ptr<const SolvedMotion> m, std::shared_ptr<const ValidityReport> report) {
+            doc_.attachValidity(m.get(), std::move(report));
+          });
   connect(&job_, &SolverJob::failed, this, [this](const QString& why) {
     progress_->setText(tr("Cannot solve: %1").arg(why));
     solveAction_->setEnabled(true);

@@ -89,6 +89,8 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
     else problem = SpacetimeProblem::build(*checked.scene, &error);
     if (!problem) {
       fail(error);
+      // Decrement through the event loop, so waitForFinished sees the failure first.
+      QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
     } else {
       SolverOptions options = solverOptionsFor(scene.solver);
       options.threads = threadCount;
@@ -124,7 +126,6 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->solved = true;
       final->converged = summary.converged;
       final->reason = summary.reason;
-      final->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));
       const int gen = run->generation;
       std::shared_ptr<const SolvedMotion> result = final;
       {
@@ -139,9 +140,18 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
             if (self && gen == self->generation_) emit self->finished(result, summary);
           },
           Qt::QueuedConnection);
+      // The solve is over for the interface: the result goes on screen now, and its validity
+      // report (tens of milliseconds for a jump: the dense grid and a forward simulation of
+      // every flight) follows as a `validated` signal.
+      QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
+      auto report = std::make_shared<const ValidityReport>(checkValidity(*problem));
+      QMetaObject::invokeMethod(
+          qApp,
+          [self, result, report, gen] {
+            if (self && gen == self->generation_) emit self->validated(result, report);
+          },
+          Qt::QueuedConnection);
     }
-    // Decrement last, through the event loop, so waitForFinished sees the final signal first.
-    QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
     --alive_;  // after this the thread touches nothing of the job
   });
 }

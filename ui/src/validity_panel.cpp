@@ -2,6 +2,7 @@
 #include "ui/validity_panel.h"
 
 #include <QHeaderView>
+#include <QShowEvent>
 #include <QVBoxLayout>
 #include <algorithm>
 
@@ -26,15 +27,38 @@ ValidityPanel::ValidityPanel(Document* doc, QWidget* parent) : QWidget(parent), 
   layout->addWidget(list_, 1);
   connect(doc_, &Document::motionChanged, this, &ValidityPanel::refresh);
   connect(doc_, &Document::sceneChanged, this, &ValidityPanel::refresh);
+  connect(doc_, &Document::validityChanged, this, &ValidityPanel::refresh);
   refresh();
 }
 
+QTreeWidget* ValidityPanel::list() {
+  if (stale_) rebuild();
+  return list_;
+}
+
+QString ValidityPanel::verdict() {
+  if (stale_) rebuild();
+  return verdict_->text();
+}
+
+void ValidityPanel::showEvent(QShowEvent* e) {
+  QWidget::showEvent(e);
+  if (stale_) rebuild();
+}
+
 void ValidityPanel::refresh() {
+  stale_ = true;
+  if (isVisible()) rebuild();
+}
+
+void ValidityPanel::rebuild() {
+  stale_ = false;
   list_->clear();
   const std::shared_ptr<const SolvedMotion> motion = doc_->motion();
   if (!motion || !motion->validity) {
-    verdict_->setText(motion && !motion->solved ? tr("Solving… the motion is checked when the solve ends.")
-                                                : tr("Solve to check the motion."));
+    verdict_->setText(!motion          ? tr("Solve to check the motion.")
+                      : motion->solved ? tr("Checking the motion…")
+                                       : tr("Solving… the motion is checked when the solve ends."));
     return;
   }
   std::vector<ValidityCheck> checks = validityChecklist(*motion->validity);

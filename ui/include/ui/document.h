@@ -52,6 +52,10 @@ class Document : public QObject {
   // The motion on show: null when none fits the scene.
   std::shared_ptr<const SolvedMotion> motion() const { return motion_; }
   void setMotion(std::shared_ptr<const SolvedMotion> motion);
+  // Attaches a validity report to the current motion if it is still `motion` (a report that
+  // arrives after a newer motion is dropped). Emits validityChanged, not motionChanged: nothing
+  // needs redrawing but the validity view.
+  void attachValidity(const SolvedMotion* motion, std::shared_ptr<const ValidityReport> report);
 
   double currentTime() const { return time_; }
   void setCurrentTime(double t);
@@ -73,6 +77,7 @@ class Document : public QObject {
  signals:
   void sceneChanged();
   void motionChanged();
+  void validityChanged();
   void currentTimeChanged(double t);
   void selectionChanged();
   void filePathChanged(const QString& path);

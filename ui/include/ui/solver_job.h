@@ -32,7 +32,8 @@ class SolverJob : public QObject {
              std::shared_ptr<const Scene> warmScene = nullptr);
   void cancel();
   bool isRunning() const { return running_ > 0; }
-  // Blocks (processing events) until no solve runs; false on timeout.
+  // Blocks (processing events) until no solve runs and its result is delivered; false on
+  // timeout. The result's validity report may still be on its way (`validated`).
   bool waitForFinished(int timeoutMs);
 
   // Ceres evaluation threads. One by default: on a 2-core machine the other core stays with the
@@ -44,6 +45,9 @@ class SolverJob : public QObject {
   void finished(std::shared_ptr<const spacetime::ui::SolvedMotion> motion,
                 const spacetime::SolverSummary& summary);
   void failed(const QString& reason);
+  // The validity report of a finished motion, computed after it was handed over.
+  void validated(std::shared_ptr<const spacetime::ui::SolvedMotion> motion,
+                 std::shared_ptr<const spacetime::ValidityReport> report);
 
  private:
   struct Run;

@@ -19,15 +19,23 @@ class ValidityPanel : public QWidget {
  public:
   explicit ValidityPanel(Document* doc, QWidget* parent = nullptr);
 
-  QTreeWidget* list() const { return list_; }
-  QString verdict() const { return verdict_->text(); }
+  // Both bring the panel up to date first (it rebuilds lazily, see refresh()).
+  QTreeWidget* list();
+  QString verdict();
+
+ protected:
+  void showEvent(QShowEvent* e) override;
 
  private:
+  // Marks the checklist out of date and rebuilds it now only if the panel is on screen: it is
+  // usually a hidden tab, and every solve and edit would otherwise rebuild it for nobody.
   void refresh();
+  void rebuild();
 
   Document* doc_;
   QLabel* verdict_;
   QTreeWidget* list_;
+  bool stale_ = true;
 };
 
 }  // namespace spacetime::ui
