@@ -84,7 +84,9 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   json checks = json::array();
   bool valid = true;
   for (const ValidityCheck& c : validityChecklist(v)) {
-    checks.push_back({{"check", c.name}, {"value", c.value}, {"limit", c.limit}, {"unit", c.unit}, {"pass", c.pass}});
+    json jc = {{"check", c.name}, {"value", c.value}, {"limit", c.limit}, {"unit", c.unit}, {"pass", c.pass}};
+    if (c.time) jc["time"] = *c.time;  // where it is worst
+    checks.push_back(jc);
     valid = valid && c.pass;
   }
   val["checks"] = checks;

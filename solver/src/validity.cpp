@@ -290,6 +290,7 @@ std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
   check("unactuated residual at the samples", r.maxUnactuatedResidualSamples, 1e-6, "× weight");
   check("unactuated residual on the dense grid (×" + std::to_string(r.denseFactor) + ")",
         r.maxUnactuatedResidualDense, 0.01, "× weight");
+  out.back().time = r.worstDenseTime;
   check("pin error", r.maxPinError, 1e-4, "m");
   check("contact slip", r.maxContactSlip, 1e-4, "m");
   check("contact penetration", r.maxContactPenetration, 1e-4, "m");
@@ -297,9 +298,11 @@ std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
   yes("contact forces in their friction cones", r.contactsInFrictionCone);
   check("clearance violation (dense grid)", r.maxClearanceViolation, 1e-3, "m");
   check("speed at the rest terms", r.maxRestSpeed, 1e-4, "m/s or rad/s");
-  for (const FormulaCheck& f : r.formulas)
+  for (const FormulaCheck& f : r.formulas) {
     check("formula '" + f.term + "'" + (f.error.empty() ? "" : " (" + f.error + ")"),
           f.error.empty() ? f.maxViolation : 1e300, 1e-5, "");
+    out.back().time = f.worstTime;
+  }
   for (const FlightCheck& f : r.flights) {
     char span[64];
     std::snprintf(span, sizeof span, "%.3g-%.3g s", f.start, f.end);
@@ -307,7 +310,7 @@ std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
       char when[64];
       std::snprintf(when, sizeof when, " (diverges at %.3g s)", f.divergenceTime);
       out.push_back({"forward simulation of " + f.character + "'s flight " + span + when,
-                     FlightCheck::kDivergence, 0.01, "m or rad", false});
+                     FlightCheck::kDivergence, 0.01, "m or rad", false, f.divergenceTime});
     } else {
       check("forward simulation of " + f.character + "'s flight " + span, f.maxPositionError, 0.01, "m or rad");
     }
@@ -316,6 +319,7 @@ std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
     check("impact '" + i.contact + "': impulse balance", i.maxBalanceError, 1e-6, "N s");
     check("impact '" + i.contact + "': speed after", i.maxSpeedAfter, 1e-4, "m/s");
     yes("impact '" + i.contact + "': ground only pushes", i.minNormalImpulse >= 0);
+    for (size_t k = out.size() - 3; k < out.size(); ++k) out[k].time = i.time;
   }
   return out;
 }

@@ -345,6 +345,15 @@ class EditorTest : public QObject {
     // does not hold yet.
     QTRY_VERIFY(w.document()->motion()->validity);
     QVERIFY2(w.validity()->verdict().contains("fail"), qPrintable(w.validity()->verdict()));
+    // Clicking the dense-grid row takes the timeline to where the residual is worst.
+    QTreeWidget* checks = w.validity()->list();
+    QTreeWidgetItem* dense = nullptr;
+    for (int i = 0; i < checks->topLevelItemCount(); ++i)
+      if (checks->topLevelItem(i)->text(0).contains("residual on the dense grid")) dense = checks->topLevelItem(i);
+    QVERIFY(dense);
+    emit checks->itemClicked(dense, 0);
+    QCOMPARE(w.document()->currentTime(), w.document()->motion()->validity->worstDenseTime);
+    QVERIFY(w.document()->currentTime() > 0);
     // Solving again continues from where Stop left it.
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(300000));

@@ -25,6 +25,11 @@ ValidityPanel::ValidityPanel(Document* doc, QWidget* parent) : QWidget(parent), 
   list_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
   list_->header()->setStretchLastSection(false);
   layout->addWidget(list_, 1);
+  // A check that knows where it is worst takes the timeline there.
+  connect(list_, &QTreeWidget::itemClicked, this, [this](QTreeWidgetItem* item) {
+    const QVariant t = item->data(0, Qt::UserRole);
+    if (t.isValid()) doc_->setCurrentTime(t.toDouble());
+  });
   connect(doc_, &Document::motionChanged, this, &ValidityPanel::refresh);
   connect(doc_, &Document::sceneChanged, this, &ValidityPanel::refresh);
   connect(doc_, &Document::validityChanged, this, &ValidityPanel::refresh);
@@ -78,8 +83,12 @@ void ValidityPanel::rebuild() {
     item->setText(2, yesNo ? QString() : QString("≤ %1").arg(c.limit, 0, 'g', 3));
     item->setIcon(0, style()->standardIcon(c.pass ? QStyle::SP_DialogApplyButton : QStyle::SP_MessageBoxWarning));
     item->setForeground(1, c.pass ? palette().text() : QBrush(QColor(200, 40, 30)));
-    for (int column = 0; column < 3; ++column)
-      item->setToolTip(column, QString("%1: %2 %3").arg(item->text(0), item->text(1), item->text(2)));
+    QString tip = QString("%1: %2 %3").arg(item->text(0), item->text(1), item->text(2));
+    if (c.time) {
+      item->setData(0, Qt::UserRole, *c.time);
+      tip += tr("\nworst at t = %1 s: click to go there").arg(*c.time, 0, 'f', 3);
+    }
+    for (int column = 0; column < 3; ++column) item->setToolTip(column, tip);
     if (!c.pass) ++failing;
   }
   QString verdict = failing == 0 ? tr("Physically valid: all %1 checks pass.").arg(checks.size())

@@ -9,6 +9,7 @@
 // balance of every touch-down, and every formula constraint.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,7 @@ struct ValidityCheck {
   double limit = 0;   // pass when value <= limit
   std::string unit;   // "× weight", "m", "N s", ... ("" for yes/no checks)
   bool pass = true;
+  std::optional<double> time;  // where it is worst, when the check knows (to go and look)
 };
 std::vector<ValidityCheck> validityChecklist(const ValidityReport& report);
 

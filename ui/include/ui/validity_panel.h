@@ -2,8 +2,9 @@
 // the engine's validity checklist (solver/validity.h) for the document's final or loaded
 // solution - the dense-grid residual, pins, contacts, clearances, formula constraints, the
 // forward simulation of every flight and every impact - each with its value, its limit and a
-// pass/fail mark, worst first, with a one-line verdict on top. Iterates in flight are not
-// checked; the panel says so.
+// pass/fail mark, worst first, with a one-line verdict on top. Clicking a check that knows
+// where it is worst (the dense-grid residual, a formula, a diverging flight, an impact) moves the
+// timeline there. Iterates in flight are not checked; the panel says so.
 #pragma once
 
 #include <QLabel>
