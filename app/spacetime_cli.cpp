@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
   const std::vector<ValidityCheck> checks = validityChecklist(validity);
   std::string failing;
   for (const ValidityCheck& c : checks)
-    if (!c.pass) failing += "\n    " + c.name + ": " + (c.unit.empty() && c.limit == 0 ? "no" : std::to_string(c.value) + " " + c.unit + " (limit " + std::to_string(c.limit) + ")");
+    if (!c.pass) failing += "\n    " + c.name + ": " + (c.yesNo ? "no" : std::to_string(c.value) + " " + c.unit + " (limit " + std::to_string(c.limit) + ")");
   const auto passing = std::count_if(checks.begin(), checks.end(), [](const ValidityCheck& c) { return c.pass; });
   std::fprintf(stderr, "  validity: %zd of %zu checks pass%s\n", static_cast<std::ptrdiff_t>(passing), checks.size(),
                failing.empty() ? "" : ("; failing:" + failing).c_str());

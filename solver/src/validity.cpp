@@ -286,7 +286,9 @@ std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
   auto check = [&](std::string name, double value, double limit, std::string unit) {
     out.push_back({std::move(name), value, limit, std::move(unit), value <= limit});
   };
-  auto yes = [&](std::string name, bool ok) { out.push_back({std::move(name), ok ? 0.0 : 1.0, 0.0, "", ok}); };
+  auto yes = [&](std::string name, bool ok) {
+    out.push_back({std::move(name), ok ? 0.0 : 1.0, 0.0, "", ok, std::nullopt, true});
+  };
   check("unactuated residual at the samples", r.maxUnactuatedResidualSamples, 1e-6, "× weight");
   check("unactuated residual on the dense grid (×" + std::to_string(r.denseFactor) + ")",
         r.maxUnactuatedResidualDense, 0.01, "× weight");

@@ -271,6 +271,14 @@ bool ConstraintsPanel::selectedTarget(int* character, std::string* body) const {
   return true;
 }
 
+TermSpec ConstraintsPanel::newTerm(const char* stem, TermKind kind, int character) const {
+  TermSpec term;
+  term.id = doc_->uniqueTermId(stem);
+  term.kind = kind;
+  term.character = doc_->scene().characters[character].id;
+  return term;
+}
+
 std::string ConstraintsPanel::addTerm(const QString& text, TermSpec term) {
   doc_->edit(text, [&](Scene& s) { s.terms.push_back(term); });
   doc_->selectTerm(term.id);
@@ -284,10 +292,7 @@ std::string ConstraintsPanel::addPin() {
   const Model<double>& model = doc_->models()[c];
   const double t = doc_->currentTime();
   const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), t)[c];
-  TermSpec pin;
-  pin.id = doc_->uniqueTermId("pin");
-  pin.kind = TermKind::Pin;
-  pin.character = doc_->scene().characters[c].id;
+  TermSpec pin = newTerm("pin", TermKind::Pin, c);
   pin.body = body;
   pin.time = t;
   pin.position = bodyToWorld(model, q, model.bodyIndex(body), pin.point);
@@ -301,10 +306,7 @@ std::string ConstraintsPanel::keyCurrentPose() {
   if (!selectedTarget(&c, &body) || doc_->models().size() <= static_cast<size_t>(c)) return {};
   const double t = doc_->currentTime();
   const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), t)[c];
-  TermSpec key;
-  key.id = doc_->uniqueTermId("key");
-  key.kind = TermKind::Keyframe;
-  key.character = doc_->scene().characters[c].id;
+  TermSpec key = newTerm("key", TermKind::Keyframe, c);
   key.time = t;
   const std::vector<std::string> dofs = doc_->scene().characters[c].dofNames();
   for (size_t d = 0; d < dofs.size(); ++d) key.values.emplace_back(dofs[d], q[static_cast<Eigen::Index>(d)]);
@@ -315,10 +317,7 @@ std::string ConstraintsPanel::addRest() {
   int c;
   std::string body;
   if (!selectedTarget(&c, &body)) return {};
-  TermSpec rest;
-  rest.id = doc_->uniqueTermId("rest");
-  rest.kind = TermKind::Rest;
-  rest.character = doc_->scene().characters[c].id;
+  TermSpec rest = newTerm("rest", TermKind::Rest, c);
   rest.time = doc_->currentTime();
   return addTerm(tr("Add rest"), rest);
 }
@@ -328,10 +327,7 @@ std::string ConstraintsPanel::addContact() {
   std::string body;
   if (!selectedTarget(&c, &body)) return {};
   const Scene& s = doc_->scene();
-  TermSpec contact;
-  contact.id = doc_->uniqueTermId("contact");
-  contact.kind = TermKind::Contact;
-  contact.character = s.characters[c].id;
+  TermSpec contact = newTerm("contact", TermKind::Contact, c);
   contact.body = body;
   contact.points = {Eigen::Vector3d::Zero()};
   const double span = 0.2 * (s.endTime - s.startTime);
@@ -345,10 +341,7 @@ std::string ConstraintsPanel::addClearance() {
   std::string body;
   if (!selectedTarget(&c, &body)) return {};
   const Scene& s = doc_->scene();
-  TermSpec clearance;
-  clearance.id = doc_->uniqueTermId("clearance");
-  clearance.kind = TermKind::Clearance;
-  clearance.character = s.characters[c].id;
+  TermSpec clearance = newTerm("clearance", TermKind::Clearance, c);
   clearance.body = body;
   clearance.start = s.startTime;
   clearance.end = s.endTime;
@@ -360,10 +353,7 @@ std::string ConstraintsPanel::addFormula() {
   int c;
   std::string body;
   if (!selectedTarget(&c, &body)) return {};
-  TermSpec f;
-  f.id = doc_->uniqueTermId("formula");
-  f.kind = TermKind::Formula;
-  f.character = doc_->scene().characters[c].id;
+  TermSpec f = newTerm("formula", TermKind::Formula, c);
   f.expression = "pos(" + body + ").y";
   f.relation = '>';
   f.value = doc_->scene().groundHeight;

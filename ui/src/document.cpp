@@ -98,11 +98,14 @@ bool Document::saveAs(const QString& path, QString* error) {
     return false;
   }
   undo_.setClean();
-  if (path != path_) {
-    path_ = path;
-    emit filePathChanged(path_);
-  }
+  setFilePath(path);
   return true;
+}
+
+void Document::setFilePath(const QString& path) {
+  if (path == path_) return;
+  path_ = path;
+  emit filePathChanged(path_);
 }
 
 void Document::setMotion(std::shared_ptr<const SolvedMotion> motion) {

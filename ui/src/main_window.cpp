@@ -394,8 +394,7 @@ void MainWindow::offerRecovery() {
 bool MainWindow::recoverAutosave(const QString& file, QString* error) {
   if (!doc_.open(file, error)) return false;
   // A recovered scene has no file yet (Save asks where) and is unsaved work.
-  Scene s = doc_.sceneForSave();
-  doc_.reset(s, {});
+  doc_.setFilePath({});
   doc_.markModified();
   return true;
 }

@@ -87,10 +87,9 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
     std::unique_ptr<SpacetimeProblem> problem;
     if (!checked.scene) error = checked.error;
     else problem = SpacetimeProblem::build(*checked.scene, &error);
+    std::shared_ptr<const SolvedMotion> result;  // the final motion, handed over below
     if (!problem) {
       fail(error);
-      // Decrement through the event loop, so waitForFinished sees the failure first.
-      QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
     } else {
       SolverOptions options = solverOptionsFor(scene.solver);
       options.threads = threadCount;
@@ -127,7 +126,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->converged = summary.converged;
       final->reason = summary.reason;
       const int gen = run->generation;
-      std::shared_ptr<const SolvedMotion> result = final;
+      result = final;
       {
         // The result supersedes an iterate not yet delivered: drawing that iterate first would
         // cost the interface a whole window repaint (~27 ms under Xvfb) before the result shows.
@@ -140,11 +139,15 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
             if (self && gen == self->generation_) emit self->finished(result, summary);
           },
           Qt::QueuedConnection);
-      // The solve is over for the interface: the result goes on screen now, and its validity
-      // report (tens of milliseconds for a jump: the dense grid and a forward simulation of
-      // every flight) follows as a `validated` signal.
-      QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
+    }
+    // The solve is over for the interface. Decrement through the event loop, so waitForFinished
+    // sees the result (or the failure) first.
+    QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
+    // The result is on screen now; its validity report (tens of milliseconds for a jump: the
+    // dense grid and a forward simulation of every flight) follows as a `validated` signal.
+    if (result) {
       auto report = std::make_shared<const ValidityReport>(checkValidity(*problem));
+      const int gen = run->generation;
       QMetaObject::invokeMethod(
           qApp,
           [self, result, report, gen] {

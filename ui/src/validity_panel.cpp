@@ -75,7 +75,7 @@ void ValidityPanel::rebuild() {
   });
   int failing = 0;
   for (const ValidityCheck& c : checks) {
-    const bool yesNo = c.unit.empty() && c.limit == 0;
+    const bool yesNo = c.yesNo;
     auto* item = new QTreeWidgetItem(list_);
     item->setText(0, QString::fromStdString(c.name));
     item->setText(1, yesNo ? (c.pass ? tr("yes") : tr("no"))

@@ -87,6 +87,7 @@ struct ValidityCheck {
   std::string unit;   // "× weight", "m", "N s", ... ("" for yes/no checks)
   bool pass = true;
   std::optional<double> time;  // where it is worst, when the check knows (to go and look)
+  bool yesNo = false;          // a yes/no check: its value and limit mean nothing to show
 };
 std::vector<ValidityCheck> validityChecklist(const ValidityReport& report);
 

@@ -34,6 +34,8 @@ class ConstraintsPanel : public QWidget {
   void rebuildList();
   void rebuildForm();
   void termForm(const std::string& id);
+  // A new term of `kind` for character `character`, with a fresh id made from `stem`.
+  TermSpec newTerm(const char* stem, TermKind kind, int character) const;
   std::string addTerm(const QString& text, TermSpec term);
   // The selected character (index) and body, or the first ones.
   bool selectedTarget(int* character, std::string* body) const;

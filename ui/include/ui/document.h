@@ -42,6 +42,8 @@ class Document : public QObject {
   Scene sceneForSave() const;
 
   QString filePath() const { return path_; }
+  // The file Save writes to (empty: Save asks where); emits filePathChanged when it changes.
+  void setFilePath(const QString& path);
   bool isModified() const { return !undo_.isClean(); }
   // Unsaved whatever the undo stack says (a recovered autosave): closing will ask to save.
   void markModified() { undo_.resetClean(); }
