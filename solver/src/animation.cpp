@@ -4,25 +4,13 @@
 #include <cmath>
 
 #include "dynamics/algorithms.h"
+#include "solver/ground_forces.h"
 
 namespace spacetime {
 
 std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
                                                      double t) {
-  std::vector<PointForce<double>> out;
-  for (int j : problem.activeContacts(c, t)) {
-    const ContactVariables& ct = problem.contacts()[j];
-    const std::vector<Eigen::Vector3d> f = problem.contactForces(j, t);
-    for (size_t p = 0; p < f.size(); ++p) {
-      PointForce<double> pf;
-      pf.body = ct.points.body;
-      pf.pointIsLocal = true;
-      pf.pointWorld = ct.points.points[p];
-      pf.forceWorld = f[p];
-      out.push_back(pf);
-    }
-  }
-  return out;
+  return groundPointForcesAt(problem, c, t);
 }
 
 Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t) {
@@ -82,13 +70,18 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
       ca.q.row(f) = problem.jointState(ci, t, 0).transpose();
       ca.qd.row(f) = problem.jointState(ci, t, 1).transpose();
       ca.qdd.row(f) = problem.jointState(ci, t, 2).transpose();
-      ca.tau.row(f) = generalizedForcesAt(problem, ci, t).transpose();
-      forwardKinematics(model, data, ca.q.row(f).transpose().eval().data());
+      const std::vector<std::vector<Eigen::Vector3d>> ground = groundForcesAt(problem, ci, t);
+      const Eigen::VectorXd q = ca.q.row(f).transpose(), qd = ca.qd.row(f).transpose(),
+                            qdd = ca.qdd.row(f).transpose();
+      ca.tau.row(f) =
+          rnea(model, data, q.data(), qd.data(), qdd.data(), groundPointForcesAt(problem, ci, t, &ground))
+              .transpose();
+      forwardKinematics(model, data, q.data());
       size_t k = 0;
       for (size_t j = 0; j < problem.contacts().size(); ++j) {
         const ContactVariables& ct = problem.contacts()[j];
         if (ct.character != ci) continue;
-        const std::vector<Eigen::Vector3d> forces = problem.contactForces(static_cast<int>(j), t);
+        const std::vector<Eigen::Vector3d>& forces = ground[j];
         for (size_t p = 0; p < ct.points.points.size(); ++p, ++k) {
           ca.contacts[k].position.push_back(pointPosition(data, ct.points.body, ct.points.points[p]));
           ca.contacts[k].force.push_back(forces[p]);

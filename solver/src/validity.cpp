@@ -9,6 +9,7 @@
 #include "dynamics/contact_points.h"
 #include "solver/animation.h"
 #include "solver/formula_series.h"
+#include "solver/ground_forces.h"
 
 namespace spacetime {
 namespace {
@@ -187,7 +188,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       if (s < ct.start || s > ct.end) continue;
       const Eigen::VectorXd q = problem.jointState(ct.character, s, 0);
       forwardKinematics(model, data, q.data());
-      const std::vector<Eigen::Vector3d> f = problem.contactForces(static_cast<int>(j), s);
+      const std::vector<Eigen::Vector3d> f = groundForcesAt(problem, ct.character, s)[j];
       for (size_t p = 0; p < ct.points.points.size(); ++p) {
         const Eigen::Vector3d w = pointPosition(data, ct.points.body, ct.points.points[p]);
         r.maxContactSlip = std::max(r.maxContactSlip, std::hypot(w.x() - anchors[p].x(), w.z() - anchors[p].z()));
@@ -197,7 +198,8 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
         // Pulling beyond 1e-6 of the contact's own character's weight (the solver's tolerance).
         if (f[p].y() < -1e-6 * weight) r.contactsPushOnly = false;
         const double tangential = std::hypot(f[p].x(), f[p].z());
-        // The 3D cone is imposed as its inscribed pyramid, so this check is conservative there.
+        // The forces are the recovered ground forces (ground_forces.h), combinations of the
+        // cone's edges; this re-checks them against the exact cone.
         r.maxConeViolation = std::max(r.maxConeViolation, (tangential - ct.friction * f[p].y()) / weight);
         if (f[p].y() >= 0.01 * weight)
           r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));

@@ -46,7 +46,8 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
 // forces (RNEA with the contacts as external point forces).
 Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t);
 
-// The contact point forces acting on character c at time t.
+// The contact point forces acting on character c at time t: the admissible ground forces that
+// best balance the motion (solver/ground_forces.h).
 std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
                                                      double t);
 
