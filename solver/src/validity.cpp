@@ -184,26 +184,34 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       for (const auto& p : ct.points.points) a.push_back(pointPosition(data, ct.points.body, p));
       return a;
     }();
-    for (double s : dense) {
-      if (s < ct.start || s > ct.end) continue;
+    // The dense grid in the contact's interval, and its samples.
+    std::vector<double> times = ct.times;
+    for (double s : dense)
+      if (s >= ct.start && s <= ct.end) times.push_back(s);
+    const double weight = problem.characters()[ct.character].weight;
+    for (double s : times) {
       const Eigen::VectorXd q = problem.jointState(ct.character, s, 0);
       forwardKinematics(model, data, q.data());
-      const std::vector<Eigen::Vector3d> f = groundForcesAt(problem, ct.character, s)[j];
       for (size_t p = 0; p < ct.points.points.size(); ++p) {
         const Eigen::Vector3d w = pointPosition(data, ct.points.body, ct.points.points[p]);
         r.maxContactSlip = std::max(r.maxContactSlip, std::hypot(w.x() - anchors[p].x(), w.z() - anchors[p].z()));
         r.maxContactPenetration = std::max(r.maxContactPenetration, scene.groundHeight - w.y());
-        const double weight = problem.characters()[ct.character].weight;
-        r.minNormalForce = std::min(r.minNormalForce, f[p].y());
-        // Pulling beyond 1e-6 of the contact's own character's weight (the solver's tolerance).
-        if (f[p].y() < -1e-6 * weight) r.contactsPushOnly = false;
-        const double tangential = std::hypot(f[p].x(), f[p].z());
-        // The forces are the recovered ground forces (ground_forces.h), combinations of the
-        // cone's edges; this re-checks them against the exact cone.
-        r.maxConeViolation = std::max(r.maxConeViolation, (tangential - ct.friction * f[p].y()) / weight);
-        if (f[p].y() >= 0.01 * weight)
-          r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));
       }
+      // The recovered ground forces are cone-edge combinations, so they push and stay in the
+      // cone by construction; the solver's own variables, checked at the samples, are not.
+      std::vector<std::vector<Eigen::Vector3d>> forceSets = {groundForcesAt(problem, ct.character, s)[j]};
+      if (ct.sampleIndex(s) >= 0) forceSets.push_back(problem.contactForces(static_cast<int>(j), s));
+      for (const std::vector<Eigen::Vector3d>& f : forceSets)
+        for (size_t p = 0; p < f.size(); ++p) {
+          r.minNormalForce = std::min(r.minNormalForce, f[p].y());
+          // Pulling beyond 1e-6 of the contact's own character's weight (the solver's tolerance).
+          if (f[p].y() < -1e-6 * weight) r.contactsPushOnly = false;
+          const double tangential = std::hypot(f[p].x(), f[p].z());
+          // The exact cone: the solver imposes an inscribed pyramid, so this is conservative.
+          r.maxConeViolation = std::max(r.maxConeViolation, (tangential - ct.friction * f[p].y()) / weight);
+          if (f[p].y() >= 0.01 * weight)
+            r.maxFrictionRatio = std::max(r.maxFrictionRatio, tangential / (ct.friction * f[p].y()));
+        }
     }
   }
   for (size_t j = 0; j < problem.contacts().size(); ++j) {

@@ -94,6 +94,25 @@ TEST(LuxoValidity, FlagsADivergingForwardSimulation) {
   EXPECT_NE(summary.find("\"forward_simulation_diverged\": true"), std::string::npos) << summary;
 }
 
+// The forces reported between samples are recovered cone-edge combinations (they push by
+// construction), so the push-only and cone checks must also read the solver's own variables at
+// the samples: one sample made to pull is flagged, although the recovered forces never pull.
+TEST(LuxoValidity, FlagsAContactVariableThatPulls) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(luxoScene(), &error);
+  ASSERT_TRUE(problem) << error;
+  EXPECT_TRUE(checkValidity(*problem).contactsPushOnly);  // the default guess pushes
+  const ContactVariables& ct = problem->contacts()[0];
+  const int sample = static_cast<int>(ct.times.size()) / 2;
+  problem->variables()[ct.forceOffset + sample * ct.blockSize() + 1] = -5.0;  // point 0, y
+  const ValidityReport v = checkValidity(*problem);
+  EXPECT_FALSE(v.contactsPushOnly);
+  EXPECT_LT(v.minNormalForce, -4.99);
+  EXPECT_GT(v.maxConeViolation, 0.0);
+  for (const std::vector<Eigen::Vector3d>& f : groundForcesAt(*problem, 0, ct.times[sample]))
+    for (const Eigen::Vector3d& p : f) EXPECT_GE(p.y(), 0.0);
+}
+
 // The root's curves at random variables: velocity and acceleration are the time derivatives
 // of position and velocity (central differences inside every interval), and position and
 // velocity are continuous at every breakpoint but the landing impact's.
