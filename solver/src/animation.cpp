@@ -8,17 +8,13 @@
 
 namespace spacetime {
 
-std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
-                                                     double t) {
-  return groundPointForcesAt(problem, c, t);
-}
-
-Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t) {
+Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t,
+                                    const GroundForces* ground) {
   const Model<double>& model = *problem.characters()[c].model;
   const Eigen::VectorXd q = problem.jointState(c, t, 0), qd = problem.jointState(c, t, 1),
                         qdd = problem.jointState(c, t, 2);
   Data<double> data(model);
-  return rnea(model, data, q.data(), qd.data(), qdd.data(), contactPointForcesAt(problem, c, t));
+  return rnea(model, data, q.data(), qd.data(), qdd.data(), groundPointForcesAt(problem, c, t, ground));
 }
 
 Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {
@@ -70,13 +66,9 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
       ca.q.row(f) = problem.jointState(ci, t, 0).transpose();
       ca.qd.row(f) = problem.jointState(ci, t, 1).transpose();
       ca.qdd.row(f) = problem.jointState(ci, t, 2).transpose();
-      const std::vector<std::vector<Eigen::Vector3d>> ground = groundForcesAt(problem, ci, t);
-      const Eigen::VectorXd q = ca.q.row(f).transpose(), qd = ca.qd.row(f).transpose(),
-                            qdd = ca.qdd.row(f).transpose();
-      ca.tau.row(f) =
-          rnea(model, data, q.data(), qd.data(), qdd.data(), groundPointForcesAt(problem, ci, t, &ground))
-              .transpose();
-      forwardKinematics(model, data, q.data());
+      const GroundForces ground = groundForcesAt(problem, ci, t);
+      ca.tau.row(f) = generalizedForcesAt(problem, ci, t, &ground).transpose();
+      forwardKinematics(model, data, ca.q.row(f).transpose().eval().data());
       size_t k = 0;
       for (size_t j = 0; j < problem.contacts().size(); ++j) {
         const ContactVariables& ct = problem.contacts()[j];

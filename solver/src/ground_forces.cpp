@@ -38,9 +38,8 @@ PointForce<double> pointForce(const ContactVariables& ct, size_t p, const Eigen:
 
 }  // namespace
 
-std::vector<std::vector<Eigen::Vector3d>> groundForcesAt(const SpacetimeProblem& problem, int c,
-                                                         double t) {
-  std::vector<std::vector<Eigen::Vector3d>> out(problem.contacts().size());
+GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t) {
+  GroundForces out(problem.contacts().size());
   for (size_t j = 0; j < out.size(); ++j)
     out[j].assign(problem.contacts()[j].points.points.size(), Eigen::Vector3d::Zero());
   const std::vector<int> active = problem.activeContacts(c, t);
@@ -61,7 +60,7 @@ std::vector<std::vector<Eigen::Vector3d>> groundForcesAt(const SpacetimeProblem&
     Eigen::Vector3d edge;
   };
   std::vector<Column> columns;
-  std::vector<std::vector<Eigen::Vector3d>> interpolated;
+  GroundForces interpolated;
   int pointCount = 0;
   for (int j : active) {
     const ContactVariables& ct = problem.contacts()[j];
@@ -104,10 +103,10 @@ std::vector<std::vector<Eigen::Vector3d>> groundForcesAt(const SpacetimeProblem&
   return out;
 }
 
-std::vector<PointForce<double>> groundPointForcesAt(
-    const SpacetimeProblem& problem, int c, double t,
-    const std::vector<std::vector<Eigen::Vector3d>>* forces) {
-  const std::vector<std::vector<Eigen::Vector3d>> f = forces ? *forces : groundForcesAt(problem, c, t);
+std::vector<PointForce<double>> groundPointForcesAt(const SpacetimeProblem& problem, int c,
+                                                    double t, const GroundForces* forces) {
+  GroundForces computed;
+  const GroundForces& f = forces ? *forces : (computed = groundForcesAt(problem, c, t));
   std::vector<PointForce<double>> out;
   for (int j : problem.activeContacts(c, t))
     for (size_t p = 0; p < f[j].size(); ++p) out.push_back(pointForce(problem.contacts()[j], p, f[j][p]));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "dynamics/algorithms.h"
 #include "dynamics/contact_points.h"
@@ -14,9 +15,9 @@
 namespace spacetime {
 namespace {
 
-double unactuatedResidual(const SpacetimeProblem& problem, int c, double t) {
+double unactuatedResidual(const SpacetimeProblem& problem, int c, double t, const GroundForces& ground) {
   const CharacterVariables& cv = problem.characters()[c];
-  const Eigen::VectorXd tau = generalizedForcesAt(problem, c, t);
+  const Eigen::VectorXd tau = generalizedForcesAt(problem, c, t, &ground);
   double worst = 0;
   for (int d = 0; d < cv.dofs; ++d)
     if (!cv.model->bodies[cv.model->dofBody[d]].actuated) worst = std::max(worst, std::abs(tau[d]));
@@ -40,7 +41,7 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
   };
   auto accel = [&](double t, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
     const Eigen::VectorXd tau = torque(t);
-    return aba(model, data, q.data(), qd.data(), tau.data(), contactPointForcesAt(problem, c, t));
+    return aba(model, data, q.data(), qd.data(), tau.data(), groundPointForcesAt(problem, c, t));
   };
   const int steps = std::max(10, static_cast<int>(std::ceil((t1 - t0) / 5e-4)));
   const double h = (t1 - t0) / steps;
@@ -123,12 +124,21 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
   const Transcription& tr = problem.transcription();
   const std::vector<double> dense = tr.denseGrid(denseFactor);
   r.minNormalForce = problem.contacts().empty() ? 0 : 1e300;
+  // Ground forces (an NNLS each) by character and time, solved once: the residual checks and
+  // the contact checks below read the same instants.
+  std::map<std::pair<int, double>, GroundForces> groundCache;
+  auto groundAt = [&](int c, double t) -> const GroundForces& {
+    auto [it, fresh] = groundCache.try_emplace({c, t});
+    if (fresh) it->second = groundForcesAt(problem, c, t);
+    return it->second;
+  };
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const int ci = static_cast<int>(c);
     for (const Sample& s : tr.samples)
-      r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples, unactuatedResidual(problem, ci, s.time));
+      r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples,
+                                                unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time)));
     for (double t : dense) {
-      const double v = unactuatedResidual(problem, ci, t);
+      const double v = unactuatedResidual(problem, ci, t, groundAt(ci, t));
       if (v > r.maxUnactuatedResidualDense) {
         r.maxUnactuatedResidualDense = v;
         r.worstDenseTime = t;
@@ -199,7 +209,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       }
       // The recovered ground forces are cone-edge combinations, so they push and stay in the
       // cone by construction; the solver's own variables, checked at the samples, are not.
-      std::vector<std::vector<Eigen::Vector3d>> forceSets = {groundForcesAt(problem, ct.character, s)[j]};
+      std::vector<std::vector<Eigen::Vector3d>> forceSets = {groundAt(ct.character, s)[j]};
       if (ct.sampleIndex(s) >= 0) forceSets.push_back(problem.contactForces(static_cast<int>(j), s));
       for (const std::vector<Eigen::Vector3d>& f : forceSets)
         for (size_t p = 0; p < f.size(); ++p) {

@@ -10,6 +10,7 @@
 #include "split_landing.h"
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
+#include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/ground_forces.h"
 #include "solver/outputs.h"
@@ -187,23 +188,9 @@ TEST(Luxo, GroundForcesBalanceTheContactPhasesBetweenSamples) {
   const auto problem = solved(luxoScene(), &s, 2);
   ASSERT_TRUE(s.converged) << s.reason;
   const CharacterVariables& cv = problem->characters()[0];
-  const Model<double>& model = *cv.model;
-  Data<double> data(model);
   // Euclidean norm of the root rows, as a fraction of the weight, with the given forces.
-  auto rootResidual = [&](double t, const std::vector<std::vector<Eigen::Vector3d>>& forces) {
-    std::vector<PointForce<double>> fext;
-    for (int j : problem->activeContacts(0, t))
-      for (size_t p = 0; p < forces[j].size(); ++p) {
-        PointForce<double> pf;
-        pf.body = problem->contacts()[j].points.body;
-        pf.pointIsLocal = true;
-        pf.pointWorld = problem->contacts()[j].points.points[p];
-        pf.forceWorld = forces[j][p];
-        fext.push_back(pf);
-      }
-    const Eigen::VectorXd q = problem->jointState(0, t, 0), qd = problem->jointState(0, t, 1),
-                          qdd = problem->jointState(0, t, 2);
-    return rnea(model, data, q.data(), qd.data(), qdd.data(), fext).head(3).norm() / cv.weight;
+  auto rootResidual = [&](double t, const GroundForces& forces) {
+    return generalizedForcesAt(*problem, 0, t, &forces).head(3).norm() / cv.weight;
   };
   double worstInterpolated = 0, worstRecovered = 0;
   int checked = 0;
@@ -214,7 +201,7 @@ TEST(Luxo, GroundForcesBalanceTheContactPhasesBetweenSamples) {
       if (t >= ct.start && t <= ct.end) times.push_back(t);
     for (double t : times) {
       const auto recovered = groundForcesAt(*problem, 0, t);
-      std::vector<std::vector<Eigen::Vector3d>> interpolated(problem->contacts().size());
+      GroundForces interpolated(problem->contacts().size());
       for (int k : problem->activeContacts(0, t)) interpolated[k] = problem->contactForces(k, t);
       const double ri = rootResidual(t, interpolated), rr = rootResidual(t, recovered);
       EXPECT_LE(rr, ri + 1e-9) << "t = " << t;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/ground_forces.h"
 #include "solver/spacetime_problem.h"
 
 namespace spacetime {
@@ -43,12 +44,9 @@ Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz);
 Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<double>& times);
 
 // The generalized forces of character c at time t from the solution's motion and contact
-// forces (RNEA with the contacts as external point forces).
-Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t);
-
-// The contact point forces acting on character c at time t: the admissible ground forces that
-// best balance the motion (solver/ground_forces.h).
-std::vector<PointForce<double>> contactPointForcesAt(const SpacetimeProblem& problem, int c,
-                                                     double t);
+// forces (RNEA with the contacts as external point forces); `ground` is groundForcesAt(problem,
+// c, t) if the caller has it already.
+Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t,
+                                    const GroundForces* ground = nullptr);
 
 }  // namespace spacetime

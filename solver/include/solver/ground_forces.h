@@ -28,14 +28,15 @@
 
 namespace spacetime {
 
+// [contact][point]: world force of each point of each contact of the problem.
+using GroundForces = std::vector<std::vector<Eigen::Vector3d>>;
+
 // Forces of every point of every contact of the problem (indexed like problem.contacts()) on
 // character c at time t: zero for contacts of other characters or not active at t.
-std::vector<std::vector<Eigen::Vector3d>> groundForcesAt(const SpacetimeProblem& problem, int c,
-                                                         double t);
+GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t);
 
 // The same as point forces for RNEA; `forces` is groundForcesAt(problem, c, t) if given.
-std::vector<PointForce<double>> groundPointForcesAt(
-    const SpacetimeProblem& problem, int c, double t,
-    const std::vector<std::vector<Eigen::Vector3d>>* forces = nullptr);
+std::vector<PointForce<double>> groundPointForcesAt(const SpacetimeProblem& problem, int c,
+                                                    double t, const GroundForces* forces = nullptr);
 
 }  // namespace spacetime
