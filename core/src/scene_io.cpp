@@ -469,12 +469,17 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("solver")) {
     const json& t = root["solver"];
-    r.allowKeys(t, "solver", {"maxOuterIterations", "maxInnerIterations", "tolerance"});
+    r.allowKeys(t, "solver", {"maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty"});
     if (t.contains("maxOuterIterations"))
       s.solver.maxOuterIterations = r.integer(t["maxOuterIterations"], "solver.maxOuterIterations", 1, 1000);
     if (t.contains("maxInnerIterations"))
       s.solver.maxInnerIterations = r.integer(t["maxInnerIterations"], "solver.maxInnerIterations", 1, 100000);
     if (t.contains("tolerance")) s.solver.tolerance = r.positive(t["tolerance"], "solver.tolerance");
+    if (t.contains("maxPenalty")) {
+      s.solver.maxPenalty = r.number(t["maxPenalty"], "solver.maxPenalty");
+      if (!(s.solver.maxPenalty >= SolverSpec::kMinPenalty))
+        r.badValue("solver.maxPenalty", t["maxPenalty"], "a number >= 100 (the starting penalty)");
+    }
   }
   const json& chars = r.required(root, "", "characters");
   if (!chars.is_array() || chars.empty()) r.badValue("characters", chars, "a non-empty array");
@@ -696,7 +701,8 @@ std::string sceneToJson(const Scene& s) {
                            {"samplesPerSegment", s.transcription.samplesPerSegment}};
   root["solver"] = {{"maxOuterIterations", s.solver.maxOuterIterations},
                     {"maxInnerIterations", s.solver.maxInnerIterations},
-                    {"tolerance", s.solver.tolerance}};
+                    {"tolerance", s.solver.tolerance},
+                    {"maxPenalty", s.solver.maxPenalty}};
   json chars = json::array();
   for (const auto& c : s.characters) {
     json jc;

@@ -80,6 +80,7 @@ SolverOptions solverOptionsFor(const SolverSpec& spec) {
   options.maxOuterIterations = spec.maxOuterIterations;
   options.maxInnerIterations = spec.maxInnerIterations;
   options.tolerance = spec.tolerance;
+  options.maxPenalty = spec.maxPenalty;
   return options;
 }
 

@@ -91,6 +91,7 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
        "solution.variables[1]': value \"x\""},
       {minimalWith(R"({"id": "base", "mass": 1, "inertia": [1, 1, 5]})"), "triangle inequality"},
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
+      {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
   };
   for (const auto& c : cases) {
     const SceneLoadResult r = parseScene(c.json, "bad.json");

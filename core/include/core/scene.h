@@ -130,6 +130,11 @@ struct SolverSpec {
   int maxOuterIterations = 30;
   int maxInnerIterations = 60;
   double tolerance = 1e-7;  // on scaled constraint rows (metres, radians, fraction of weight)
+  // Cap of the augmented Lagrangian's penalty rho. Capped at 1e7 (it was 1e10), the
+  // multipliers, not the penalty, meet the constraints, and Levenberg-Marquardt is not driven
+  // into the nearest feasible point: luxo_jump's effort optimum fell from 134.5 to 17.53.
+  static constexpr double kMinPenalty = 100;  // the penalty a cold solve starts from
+  double maxPenalty = 1e7;
 };
 
 // A solved motion saved with the scene so reopening shows it: the solver's variables and

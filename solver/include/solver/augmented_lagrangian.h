@@ -22,9 +22,9 @@ struct SolverOptions {
   int maxInnerIterations = 60;   // Levenberg-Marquardt iterations per outer iteration
   int maxProjectionIterations = 50;  // Gauss-Newton iterations of the final projection
   double tolerance = 1e-7;       // largest constraint row (metres, radians, fraction of weight)
-  double initialPenalty = 100;   // rho at a cold start
+  double initialPenalty = SolverSpec::kMinPenalty;  // rho at a cold start
   double penaltyGrowth = 10;     // rho *= growth when the violation did not shrink enough
-  double maxPenalty = 1e10;
+  double maxPenalty = SolverSpec{}.maxPenalty;  // see SolverSpec::maxPenalty
   double maxSeconds = 300;       // wall-clock budget of the whole solve
   int threads = 1;               // Ceres evaluation threads
   bool warmStart = false;        // keep the problem's current multipliers and penalty
