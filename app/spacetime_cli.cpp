@@ -62,8 +62,8 @@ int main(int argc, char** argv) {
   ProgressCallback progress = nullptr;
   if (!quiet)
     progress = [](const IterationReport& r) {
-      std::fprintf(stderr, "iteration %4d  outer %2d  objective %.6g  violation %.3g\n", r.iterations,
-                   r.outer, r.objective, r.maxViolation);
+      std::fprintf(stderr, "iteration %4d  outer %2d  objective %.6g  violation %.3g  penalty %.3g\n",
+                   r.iterations, r.outer, r.objective, r.maxViolation, r.rho);
       return true;
     };
   const SolverSummary summary = solveSpacetime(*problem, options, progress);
