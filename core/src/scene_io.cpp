@@ -478,7 +478,9 @@ Scene readScene(const Reader& r, const json& root) {
     if (t.contains("maxPenalty")) {
       s.solver.maxPenalty = r.number(t["maxPenalty"], "solver.maxPenalty");
       if (!(s.solver.maxPenalty >= SolverSpec::kMinPenalty))
-        r.badValue("solver.maxPenalty", t["maxPenalty"], "a number >= 100 (the starting penalty)");
+        r.badValue("solver.maxPenalty", t["maxPenalty"],
+                   "a number >= " + std::to_string(static_cast<int>(SolverSpec::kMinPenalty)) +
+                       " (the starting penalty)");
     }
   }
   const json& chars = r.required(root, "", "characters");
