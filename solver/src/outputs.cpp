@@ -59,6 +59,10 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   val["contacts_push_only"] = v.contactsPushOnly;
   val["contacts_in_friction_cone"] = v.contactsInFrictionCone;
   val["max_clearance_violation"] = v.maxClearanceViolation;
+  if (!v.worstClearanceTerm.empty()) {
+    val["worst_clearance_time"] = v.worstClearanceTime;
+    val["worst_clearance_term"] = v.worstClearanceTerm;
+  }
   val["max_rest_speed"] = v.maxRestSpeed;
   val["max_forward_simulation_error"] = v.maxForwardSimulationError;
   json flights = json::array();

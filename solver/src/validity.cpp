@@ -177,7 +177,11 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
           const Eigen::Vector3d p = pointAt(s, t.point);
           const double outside = t.box ? std::max((p - t.boxMax).maxCoeff(), (t.boxMin - p).maxCoeff())
                                        : p.y() - t.height;
-          r.maxClearanceViolation = std::max(r.maxClearanceViolation, -outside);
+          if (-outside > r.maxClearanceViolation) {
+            r.maxClearanceViolation = -outside;
+            r.worstClearanceTime = s;
+            r.worstClearanceTerm = t.id;
+          }
         }
         break;
       default: break;
@@ -318,7 +322,10 @@ std::vector<ValidityCheck> validityChecklist(const ValidityReport& r) {
   check("contact penetration", r.maxContactPenetration, 1e-4, "m");
   yes("contacts only push", r.contactsPushOnly);
   yes("contact forces in their friction cones", r.contactsInFrictionCone);
-  check("clearance violation (dense grid)", r.maxClearanceViolation, 1e-3, "m");
+  check("clearance violation (dense grid)" +
+            (r.worstClearanceTerm.empty() ? std::string() : " of '" + r.worstClearanceTerm + "'"),
+        r.maxClearanceViolation, 1e-3, "m");
+  if (!r.worstClearanceTerm.empty()) out.back().time = r.worstClearanceTime;
   check("speed at the rest terms", r.maxRestSpeed, 1e-4, "m/s or rad/s");
   for (const FormulaCheck& f : r.formulas) {
     check("formula '" + f.term + "'" + (f.error.empty() ? "" : " (" + f.error + ")"),

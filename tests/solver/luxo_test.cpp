@@ -113,6 +113,50 @@ TEST(LuxoValidity, FlagsAContactVariableThatPulls) {
     for (const Eigen::Vector3d& p : f) EXPECT_GE(p.y(), 0.0);
 }
 
+// A clearance the motion breaks is reported with its term and the dense-grid instant of its
+// deepest violation: the head held 1 m up over 0.5-0.6 s, which the default guess never reaches,
+// is violated by exactly 1 m minus the head's height at the reported instant, and by no more at
+// any instant of the interval.
+TEST(LuxoValidity, NamesTheClearanceTermAndInstantThatDips) {
+  Scene scene = luxoScene();
+  TermSpec high;
+  high.id = "head_up_high";
+  high.kind = TermKind::Clearance;
+  high.character = "luxo";
+  high.body = "head";
+  high.start = 0.5;
+  high.end = 0.6;
+  high.height = 1.0;
+  scene.terms.push_back(high);
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  const ValidityReport v = checkValidity(*problem);
+  ASSERT_EQ(v.worstClearanceTerm, "head_up_high");
+  EXPECT_GE(v.worstClearanceTime, 0.5);
+  EXPECT_LE(v.worstClearanceTime, 0.6);
+  const Model<double>& model = *problem->characters()[0].model;
+  Data<double> data(model);
+  auto headHeight = [&](double t) {
+    const Eigen::VectorXd q = problem->jointState(0, t, 0);
+    forwardKinematics(model, data, q.data());
+    return pointPosition(data, model.bodyIndex("head"), Eigen::Vector3d(Eigen::Vector3d::Zero())).y();
+  };
+  EXPECT_NEAR(v.maxClearanceViolation, 1.0 - headHeight(v.worstClearanceTime), 1e-12);
+  for (double t = 0.5; t <= 0.6; t += 0.001) EXPECT_LE(1.0 - headHeight(t), v.maxClearanceViolation + 1e-3);
+  bool named = false;
+  for (const ValidityCheck& c : validityChecklist(v))
+    if (c.name.find("head_up_high") != std::string::npos) {
+      named = true;
+      EXPECT_FALSE(c.pass);
+      ASSERT_TRUE(c.time.has_value());
+      EXPECT_EQ(*c.time, v.worstClearanceTime);
+    }
+  EXPECT_TRUE(named);
+  const std::string summary = summaryJson(SolverSummary(), v, *problem);
+  EXPECT_NE(summary.find("\"worst_clearance_term\": \"head_up_high\""), std::string::npos) << summary;
+}
+
 // The root's curves at random variables: velocity and acceleration are the time derivatives
 // of position and velocity (central differences inside every interval), and position and
 // velocity are continuous at every breakpoint but the landing impact's.

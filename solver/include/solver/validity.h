@@ -63,6 +63,8 @@ struct ValidityReport {
   double maxFrictionRatio = 0;              // |f_t| / (mu f_n) where f_n >= 1 % of weight
   double maxConeViolation = 0;              // max(0, |f_t| - mu f_n), fraction of weight
   double maxClearanceViolation = 0;         // m
+  double worstClearanceTime = 0;            // when, and which term
+  std::string worstClearanceTerm;
   double maxRestSpeed = 0;                  // largest |qd| at the rest terms
   std::vector<FlightCheck> flights;
   std::vector<ImpactCheck> impacts;
