@@ -115,8 +115,9 @@ TEST(LuxoValidity, FlagsAContactVariableThatPulls) {
 
 // A clearance the motion breaks is reported with its term and the dense-grid instant of its
 // deepest violation: the head held 1 m up over 0.5-0.6 s, which the default guess never reaches,
-// is violated by exactly 1 m minus the head's height at the reported instant, and by no more at
-// any instant of the interval.
+// is violated by exactly 1 m minus the head's height at the reported instant, and at no instant
+// of a 1 ms grid over the interval by more than 1 mm beyond that (the report's dense grid is
+// coarser, so the deepest point may fall between its instants).
 TEST(LuxoValidity, NamesTheClearanceTermAndInstantThatDips) {
   Scene scene = luxoScene();
   TermSpec high;
