@@ -80,6 +80,10 @@ int main(int argc, char** argv) {
                summary.converged ? "converged" : "NOT converged", summary.reason.c_str(),
                summary.objective, summary.maxViolation, summary.iterations, summary.solveSeconds,
                validity.maxUnactuatedResidualDense, validity.maxForwardSimulationError);
+  for (const ContactVariables& ct : problem->contacts())
+    if (ct.freeEnd >= 0)
+      std::fprintf(stderr, "  contact '%s' lifts off at %.4f s (scene end %.4f s)\n",
+                   loaded.scene->terms[ct.term].id.c_str(), ct.end, loaded.scene->terms[ct.term].end);
   const std::vector<ValidityCheck> checks = validityChecklist(validity);
   std::string failing;
   for (const ValidityCheck& c : checks)

@@ -288,7 +288,7 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       break;
     case TermKind::Contact:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "points", "start",
-                            "end", "friction", "impact"});
+                            "end", "friction", "impact", "freeEnd", "freeEndWindow"});
       break;
     case TermKind::Clearance:
       r.allowKeys(t, path, {"id", "type", "enabled", "character", "body", "point", "start",
@@ -377,6 +377,12 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       if (t.contains("friction"))
         ts.friction = r.nonNegative(t["friction"], Reader::join(path, "friction"));
       if (t.contains("impact")) ts.impact = r.boolean(t["impact"], Reader::join(path, "impact"));
+      if (t.contains("freeEnd")) ts.freeEnd = r.boolean(t["freeEnd"], Reader::join(path, "freeEnd"));
+      if (t.contains("freeEndWindow")) {
+        ts.freeEndWindow = r.nonNegative(t["freeEndWindow"], Reader::join(path, "freeEndWindow"));
+        if (!(ts.freeEndWindow > 0))
+          r.badValue(Reader::join(path, "freeEndWindow"), t["freeEndWindow"], "a positive duration in seconds");
+      }
       break;
     }
     case TermKind::Clearance:
@@ -636,6 +642,10 @@ json writeTerm(const TermSpec& t) {
       j["end"] = t.end;
       j["friction"] = t.friction;
       j["impact"] = t.impact;
+      if (t.freeEnd) {
+        j["freeEnd"] = true;
+        j["freeEndWindow"] = t.freeEndWindow;
+      }
       break;
     }
     case TermKind::Clearance:

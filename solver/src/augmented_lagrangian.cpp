@@ -92,6 +92,7 @@ std::string SolverOptions::validate() const {
   if (!(penaltyGrowth > 1)) return "penaltyGrowth must be > 1";
   if (!(maxSeconds > 0)) return "maxSeconds must be > 0";
   if (threads < 1) return "threads must be at least 1";
+  if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
   return "";
 }
 
@@ -179,6 +180,16 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   SolutionState lastGood = problem.state();
   ProblemMeasures m = measure(problem);
   double previousViolation = m.maxViolation;
+  auto holdFreeEnds = [&](bool hold) {
+    for (const FreeEnd& e : problem.freeEnds()) {
+      double* T = problem.variables().data() + e.offset;
+      if (!problem.ceresProblem().HasParameterBlock(T)) continue;
+      if (hold) problem.ceresProblem().SetParameterBlockConstant(T);
+      else problem.ceresProblem().SetParameterBlockVariable(T);
+    }
+  };
+  bool freeEndsHeld = !problem.freeEnds().empty() && m.maxViolation > options.releaseFreeEndsAt;
+  holdFreeEnds(freeEndsHeld);
   summary.status = SolveStatus::IterationLimit;
   summary.reason = "reached the limit of " + std::to_string(options.maxOuterIterations) +
                    " multiplier updates before the constraints met the tolerance";
@@ -212,7 +223,12 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     }
     lastGood = problem.state();
     const bool innerConverged = cs.termination_type == ceres::CONVERGENCE;
-    if (m.maxViolation <= options.tolerance && innerConverged) {
+    const bool release = freeEndsHeld && m.maxViolation <= options.releaseFreeEndsAt;
+    if (release) {
+      freeEndsHeld = false;
+      holdFreeEnds(false);
+    }
+    if (m.maxViolation <= options.tolerance && innerConverged && !release) {
       summary.status = SolveStatus::Converged;
       summary.converged = true;
       summary.reason = "constraints within tolerance and the augmented Lagrangian stationary";
@@ -263,6 +279,8 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       }
     }
   }
+  holdFreeEnds(false);
+  problem.syncFreeEnds();  // the problem's times follow the solved lift-off instants
   m = measure(problem);
   if (summary.status == SolveStatus::IterationLimit && m.maxViolation <= options.tolerance)
     summary.reason = "constraints within tolerance, but the augmented Lagrangian was not yet "

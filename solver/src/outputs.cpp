@@ -45,6 +45,19 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["worst_constraint"] = s.worstConstraint;
   j["variables"] = problem.variables().size();
   j["residual_blocks"] = problem.residuals().size();
+  // Each contact's interval as solved: a free end (freeEnd) is where the solver let go.
+  json contacts = json::array();
+  for (const ContactVariables& ct : problem.contacts()) {
+    const TermSpec& term = problem.scene().terms[ct.term];
+    json jc = {{"term", term.id}, {"start", ct.start}, {"end", ct.end}, {"free_end", ct.freeEnd >= 0}};
+    if (ct.freeEnd >= 0) {
+      const FreeEnd& e = problem.freeEnds()[ct.freeEnd];
+      jc["scene_end"] = term.end;
+      jc["end_bounds"] = json::array({e.lower, e.upper});
+    }
+    contacts.push_back(jc);
+  }
+  j["contacts"] = contacts;
   json val;
   val["dense_factor"] = v.denseFactor;
   val["max_unactuated_residual_samples"] = v.maxUnactuatedResidualSamples;

@@ -112,6 +112,11 @@ GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int 
     }
     return gb;
   }
+  const int k = hermiteInterval(c, g, t, before);
+  return hermiteBasis(g, k, g.breaks[k], g.breaks[k + 1], t, order, 0, 0, 0, nullptr);
+}
+
+int SpacetimeProblem::hermiteInterval(int c, const DofGroup& g, double t, bool before) const {
   const auto& br = g.breaks;
   int k = static_cast<int>(std::upper_bound(br.begin(), br.end(), t) - br.begin()) - 1;
   k = std::clamp(k, 0, static_cast<int>(br.size()) - 2);
@@ -125,35 +130,127 @@ GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int 
       activeContacts(c, 0.5 * (br[k - 1] + br[k])) == activeContacts(c, t) &&
       activeContacts(c, 0.5 * (br[k] + br[k + 1])) != activeContacts(c, t))
     --k;
-  const double h = br[k + 1] - br[k];
-  const double u = std::clamp((t - br[k]) / h, 0.0, 1.0), u2 = u * u, u3 = u2 * u;
-  // Cubic Hermite basis (h00, h10, h01, h11) and its derivatives in u.
-  std::array<double, 4> b;
+  return k;
+}
+
+namespace {
+
+// The cubic Hermite basis (h00, h10, h01, h11) and its derivatives in u.
+std::array<double, 4> hermite(double u, int order) {
+  const double u2 = u * u, u3 = u2 * u;
   switch (order) {
-    case 0: b = {2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, -2 * u3 + 3 * u2, u3 - u2}; break;
-    case 1: b = {6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, -6 * u2 + 6 * u, 3 * u2 - 2 * u}; break;
-    case 2: b = {12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2}; break;
-    default: b = {12, 6, -12, 6}; break;
+    case 0: return {2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, -2 * u3 + 3 * u2, u3 - u2};
+    case 1: return {6 * u2 - 6 * u, 3 * u2 - 4 * u + 1, -6 * u2 + 6 * u, 3 * u2 - 2 * u};
+    case 2: return {12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2};
+    case 3: return {12, 6, -12, 6};
+    default: return {0, 0, 0, 0};
   }
-  const double scale = std::pow(h, -order);
+}
+
+}  // namespace
+
+GroupBasis SpacetimeProblem::hermiteBasis(const DofGroup& g, int k, double a, double b, double t,
+                                          int order, double rate, double da, double db,
+                                          GroupBasis* slope) const {
+  GroupBasis gb;
+  const double h = b - a;
+  const double u = std::clamp((t - a) / h, 0.0, 1.0);
+  const std::array<double, 4> w = hermite(u, order);
   const int n = static_cast<int>(g.dofs.size()), size = g.blockSize();
   gb.count = 4;  // index[0] = index[2] = 0: positions; index[1] = index[3] = n: velocities
   gb.start[0] = gb.start[1] = g.offset + k * size;
   gb.start[2] = gb.start[3] = g.offset + (k + 1) * size;
   for (int i = 0; i < 4; ++i) gb.size[i] = size;
   gb.index[1] = gb.index[3] = n;
-  gb.weight[0] = b[0] * scale;
-  gb.weight[1] = b[1] * h * scale;
-  gb.weight[2] = b[2] * scale;
-  gb.weight[3] = b[3] * h * scale;
+  // Weight i is c_i(u) h^(e_i): e = -order for positions and bubbles, 1 - order for velocities.
+  std::array<double, GroupBasis::kCapacity> power{}, shape{};
+  for (int i = 0; i < 4; ++i) {
+    power[i] = (i % 2 == 1 ? 1 : 0) - order;
+    shape[i] = w[i];
+  }
   for (int j = 0; j < g.bubbles; ++j) {
     gb.start[gb.count] = g.bubbleOffset + k * g.bubbleBlockSize();
     gb.size[gb.count] = g.bubbleBlockSize();
     gb.index[gb.count] = j * n;
-    gb.weight[gb.count] = bubble(j, u, order) * scale;
+    power[gb.count] = -order;
+    shape[gb.count] = bubble(j, u, order);
     ++gb.count;
   }
+  for (int i = 0; i < gb.count; ++i) gb.weight[i] = shape[i] * std::pow(h, power[i]);
+  if (slope) {
+    // d/dT of c(u) h^e with u = (t - a) / h: u' = (t' - a' - u h') / h, h' = b' - a'.
+    *slope = gb;
+    const double dh = db - da, du = (rate - da - u * dh) / h;
+    const std::array<double, 4> w1 = hermite(u, order + 1);
+    for (int i = 0; i < gb.count; ++i) {
+      const double next = i < 4 ? w1[i] : bubble(i - 4, u, order + 1);
+      slope->weight[i] = next * du * std::pow(h, power[i]) +
+                         power[i] * shape[i] * std::pow(h, power[i] - 1) * dh;
+    }
+  }
   return gb;
+}
+
+const DofGroup* SpacetimeProblem::rootGroup(int c) const {
+  for (const DofGroup& g : characters_[c].groups)
+    if (g.hermite) return &g;
+  return nullptr;
+}
+
+GroupBasis SpacetimeProblem::groupBasisAt(int c, const DofGroup& g, const TimeRef& r, double T,
+                                          int order, GroupBasis* slope) const {
+  const double t = r.at(T);
+  if (!g.hermite) {
+    GroupBasis gb = groupBasis(c, g, t, order);
+    *slope = gb;
+    const BSplineBasis b = g.spline.basis(t);
+    for (int i = 0; i < 4; ++i)  // cubic: the fourth derivative vanishes
+      slope->weight[i] = order + 1 <= 3 ? b.derivative(order + 1)[i] * r.rate : 0.0;
+    return gb;
+  }
+  const FreeEnd& e = freeEnds_[r.event];
+  return hermiteBasis(g, r.interval, e.map(r.intervalStart, r.eventTime, T),
+                      e.map(r.intervalEnd, r.eventTime, T), t, order, r.rate,
+                      e.rate(r.intervalStart, r.eventTime), e.rate(r.intervalEnd, r.eventTime), slope);
+}
+
+double FreeEnd::map(double t0, double from, double to) const {
+  if (std::abs(t0 - from) < kTimeTolerance) return to;
+  if (t0 <= left || t0 >= right) return t0;
+  if (t0 < from) return left + (t0 - left) * (to - left) / (from - left);
+  return to + (t0 - from) * (right - to) / (right - from);
+}
+
+double FreeEnd::rate(double t0, double from) const {
+  if (std::abs(t0 - from) < kTimeTolerance) return 1;
+  if (t0 <= left || t0 >= right) return 0;
+  return t0 < from ? (t0 - left) / (from - left) : (right - t0) / (right - from);
+}
+
+TimeRef SpacetimeProblem::timeRef(int c, double t) const {
+  TimeRef r;
+  r.time = t;
+  const DofGroup* g = rootGroup(c);
+  const int k = g ? hermiteInterval(c, *g, t, false) : -1;
+  for (size_t i = 0; i < freeEnds_.size(); ++i) {
+    const FreeEnd& e = freeEnds_[i];
+    if (t < e.left - kTimeTolerance || t > e.right + kTimeTolerance) continue;
+    TimeRef m = r;
+    m.event = static_cast<int>(i);
+    m.eventTime = e.current;
+    m.rate = e.rate(t, e.current);
+    m.side = std::abs(t - e.current) < kTimeTolerance ? 0 : t < e.current ? -1 : 1;
+    m.interval = k;
+    if (g) {
+      m.intervalStart = g->breaks[k];
+      m.intervalEnd = g->breaks[k + 1];
+    }
+    // A time at the window's end moves nothing unless its root interval lies inside the window.
+    const bool moves = m.rate > 0 || (g && (e.rate(m.intervalStart, e.current) > 0 ||
+                                            e.rate(m.intervalEnd, e.current) > 0));
+    if (moves) return m;
+  }
+  return r;
 }
 
 void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order, bool before) {
@@ -168,6 +265,42 @@ void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order,
       for (int k = 0; k < n; ++k) in.add(row0 + g.dofs[k], blk, gb.index[i] + k, gb.weight[i]);
     }
   }
+}
+
+void SpacetimeProblem::addMotionInputs(InputMap& in, int c, const TimeRef& r, double T, int order) {
+  if (r.event < 0) {
+    addMotionInputs(in, c, r.time, order);
+    return;
+  }
+  const CharacterVariables& cv = characters_[c];
+  const FreeEnd& e = freeEnds_[r.event];
+  const int row0 = in.newRows(cv.dofs);
+  for (const DofGroup& g : cv.groups) {
+    const int n = static_cast<int>(g.dofs.size());
+    if (n == 0) continue;
+    GroupBasis slope;
+    const GroupBasis gb = groupBasisAt(c, g, r, T, order, &slope);
+    if (!g.hermite) {
+      // The parameter blocks must not change with T: register every control point the moving
+      // time can reach, in order, before the ones in use.
+      const int lo = g.spline.basis(r.at(e.lower)).first, hi = g.spline.basis(r.at(e.upper)).first;
+      for (int k = lo; k <= hi + 3; ++k) in.block(x_.data() + g.offset + k * n, n);
+    }
+    for (int i = 0; i < gb.count; ++i) {
+      const int blk = in.block(x_.data() + gb.start[i], gb.size[i]);
+      for (int k = 0; k < n; ++k)
+        in.add(row0 + g.dofs[k], blk, gb.index[i] + k, gb.weight[i], slope.weight[i]);
+    }
+  }
+}
+
+void SpacetimeProblem::setQuadratureScale(InputMap& in, const TimeRef& r, double T) const {
+  if (r.event < 0 || r.side == 0) return;
+  const FreeEnd& e = freeEnds_[r.event];
+  const double h0 = r.side < 0 ? r.eventTime - e.left : e.right - r.eventTime;
+  const double h = r.side < 0 ? T - e.left : e.right - T;
+  in.objectiveScale = std::sqrt(h / h0);
+  in.objectiveScaleSlope = in.objectiveScale * (r.side < 0 ? 1.0 : -1.0) / (2 * h);
 }
 
 int ContactVariables::sampleIndex(double t) const {
@@ -185,12 +318,16 @@ std::pair<int, double> ContactVariables::interpolation(double t) const {
 }
 
 void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scale) {
+  // Forces are linear between the contact's samples; terms imposed between samples (a formula
+  // constraint at any instant of a contact) read the two neighbours.
+  addForceInputs(in, j, contacts_[j].interpolation(t), scale);
+}
+
+void SpacetimeProblem::addForceInputs(InputMap& in, int j, std::pair<int, double> at, double scale) {
   const ContactVariables& cv = contacts_[j];
   const int size = cv.blockSize();
   const int row0 = in.newRows(size);
-  // Forces are linear between the contact's samples; terms imposed between samples (a formula
-  // constraint at any instant of a contact) read the two neighbours.
-  const auto [i, a] = cv.interpolation(t);
+  const auto [i, a] = at;
   const int blk = in.block(x_.data() + cv.forceOffset + i * size, size);
   for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale * (1 - a));
   if (a != 0) {
@@ -216,6 +353,139 @@ void SpacetimeProblem::addResidual(std::shared_ptr<const Kernel> kernel, const I
   auto* residual = new TermResidual(std::move(kernel), inputs, &al_, first);
   problem_->AddResidualBlock(residual, nullptr, inputs.blocks());
   residuals_.push_back(residual);
+}
+
+void SpacetimeProblem::addResidualAt(std::shared_ptr<const Kernel> kernel, int event, const Fill& fill) {
+  if (event < 0) {
+    InputMap in;
+    fill(in, 0.0);
+    addResidual(std::move(kernel), in);
+    return;
+  }
+  if (kernel->rowCount() == 0) return;
+  const int first = static_cast<int>(al_.lambda.size());
+  al_.lambda.resize(first + kernel->rowCount(), 0.0);
+  MovingInputs moving = [fill](double T) {
+    InputMap in;
+    fill(in, T);
+    return in;
+  };
+  auto* residual = new TermResidual(std::move(kernel), std::move(moving),
+                                    x_.data() + freeEnds_[event].offset, &al_, first);
+  problem_->AddResidualBlock(residual, nullptr, residual->blocks());
+  residuals_.push_back(residual);
+}
+
+bool SpacetimeProblem::addFreeEnds(std::string* error, int* size) {
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    ContactVariables& ct = contacts_[j];
+    const TermSpec& spec = scene_.terms[ct.term];
+    if (!spec.freeEnd) continue;
+    const std::string label = "term '" + spec.id + "': a free end (freeEnd)";
+    const DofGroup* g = rootGroup(ct.character);
+    if (!g) {
+      *error = label + " needs a floating character: lifting off moves its root";
+      return false;
+    }
+    if (ct.end >= scene_.endTime - kTimeTolerance) {
+      *error = label + " needs a contact that ends before the clip does";
+      return false;
+    }
+    // The window: the root breakpoints at least freeEndWindow before and after the end.
+    const auto& tb = transcription_.breakpoints;
+    const double w = std::max(spec.freeEndWindow, kTimeTolerance);
+    FreeEnd e;
+    e.contact = static_cast<int>(j);
+    e.character = ct.character;
+    e.left = tb.front();
+    e.right = tb.back();
+    for (double b : tb) {
+      if (b <= ct.end - w + kTimeTolerance) e.left = b;
+    }
+    for (auto b = tb.rbegin(); b != tb.rend(); ++b)
+      if (*b >= ct.end + w - kTimeTolerance) e.right = *b;
+    e.current = ct.end;
+    // Keep each side of the window at least a fifth of its length.
+    e.lower = e.left + 0.2 * (ct.end - e.left);
+    e.upper = e.right - 0.2 * (e.right - ct.end);
+    if (ct.start > e.left + kTimeTolerance) {
+      *error = label + " needs the contact to cover the root interval before its end (it starts at " +
+               std::to_string(ct.start) + " s, the interval at " + std::to_string(e.left) + " s)";
+      return false;
+    }
+    for (const FreeEnd& other : freeEnds_)
+      if (other.left < e.right - kTimeTolerance && e.left < other.right - kTimeTolerance) {
+        *error = label + " lies too close to the free end of term '" +
+                 scene_.terms[contacts_[other.contact].term].id + "': their windows (" +
+                 std::to_string(other.left) + "-" + std::to_string(other.right) + " s and " +
+                 std::to_string(e.left) + "-" + std::to_string(e.right) + " s) overlap";
+        return false;
+      }
+    for (const ContactVariables& other : contacts_)
+      if (other.impact() && other.start > e.left - kTimeTolerance && other.start < e.right + kTimeTolerance) {
+        *error = label + " has a touch-down inside its window (" + std::to_string(e.left) + "-" +
+                 std::to_string(e.right) + " s)";
+        return false;
+      }
+    e.offset = (*size)++;
+    ct.freeEnd = static_cast<int>(freeEnds_.size());
+    freeEnds_.push_back(e);
+  }
+  return true;
+}
+
+bool SpacetimeProblem::checkOutsideWindows(int c, double t, const std::string& label,
+                                           std::string* error) const {
+  (void)c;  // breakpoints are shared: every character's times move with a free end
+  for (const FreeEnd& e : freeEnds_)
+    if (t > e.left + kTimeTolerance && t < e.right - kTimeTolerance &&
+        std::abs(t - e.current) > kTimeTolerance) {
+      *error = label + " at t=" + std::to_string(t) + " lies inside the lift-off window (" +
+               std::to_string(e.left) + "-" + std::to_string(e.right) + " s) of the free end of term '" +
+               scene_.terms[contacts_[e.contact].term].id +
+               "': move it out of the window or onto the contact's end";
+      return false;
+    }
+  return true;
+}
+
+void SpacetimeProblem::syncFreeEnds() {
+  for (FreeEnd& e : freeEnds_) {
+    const double T = x_[e.offset], was = e.current;
+    if (T == was) continue;
+    auto same = [&](double t) { return std::abs(t - was) < kTimeTolerance; };
+    auto move = [&](double t) { return e.map(t, was, T); };
+    for (CharacterVariables& cv : characters_)
+      for (DofGroup& g : cv.groups)
+        if (g.hermite)
+          for (double& b : g.breaks) b = move(b);
+    for (double& b : transcription_.breakpoints) b = move(b);
+    for (Sample& smp : transcription_.samples) {
+      if (smp.time > e.left && smp.time < was && !same(smp.time)) smp.weight *= (T - e.left) / (was - e.left);
+      if (smp.time > was && smp.time < e.right && !same(smp.time)) smp.weight *= (e.right - T) / (e.right - was);
+      smp.time = move(smp.time);
+    }
+    for (ContactVariables& ct : contacts_) {
+      ct.start = move(ct.start);
+      ct.end = move(ct.end);
+      for (double& t : ct.times) t = move(t);
+    }
+    e.current = T;
+  }
+}
+
+SpacetimeProblem::SampleInputs SpacetimeProblem::sampleInputs(int c, double t) const {
+  SampleInputs s;
+  s.character = c;
+  s.ref = timeRef(c, t);
+  s.active = activeContacts(c, t);
+  for (int j : s.active) s.forces.push_back(contacts_[j].interpolation(t));
+  return s;
+}
+
+void SpacetimeProblem::addSampleInputs(InputMap& in, const SampleInputs& s, double T) {
+  for (int order = 0; order < 3; ++order) addMotionInputs(in, s.character, s.ref, T, order);
+  for (size_t i = 0; i < s.active.size(); ++i) addForceInputs(in, s.active[i], s.forces[i]);
 }
 
 bool SpacetimeProblem::assemble(std::string* error) {
@@ -289,8 +559,10 @@ bool SpacetimeProblem::assemble(std::string* error) {
     }
     contacts_.push_back(cv);
   }
+  if (!addFreeEnds(error, &size)) return false;
   x_.assign(size, 0.0);
   initialGuess();
+  for (const FreeEnd& e : freeEnds_) x_[e.offset] = e.current;
 
   ceres::Problem::Options options;
   options.enable_fast_removal = false;
@@ -308,25 +580,28 @@ bool SpacetimeProblem::assemble(std::string* error) {
       o.effortWeight = obj.effort * s.weight;
       o.powerWeight = obj.power * s.weight;
       o.weightScale = 1.0 / cv.weight;
-      InputMap in;
+      const SampleInputs si = sampleInputs(ci, s.time);
+      const TimeRef r = si.ref;
       std::vector<ContactPoints> cps;
-      for (int j : addSampleInputs(in, ci, s.time)) cps.push_back(contacts_[j].points);
-      addResidual(std::make_shared<DynamicsKernel>(cv.model, cps, cv.forceDims, o,
-                                                   at("dynamics " + name, s.time)),
-                  in);
+      for (int j : si.active) cps.push_back(contacts_[j].points);
+      addResidualAt(std::make_shared<DynamicsKernel>(cv.model, cps, cv.forceDims, o,
+                                                     at("dynamics " + name, s.time)),
+                    r.event, [this, si](InputMap& in, double T) {
+                      addSampleInputs(in, si, T);
+                      setQuadratureScale(in, si.ref, T);
+                    });
       if (obj.smoothness > 0 && s.weight > 0) {
-        InputMap sm;
-        addMotionInputs(sm, ci, s.time, obj.smoothnessOrder);
-        addResidual(std::make_shared<WeightedValueKernel>(cv.dofs, obj.smoothness * s.weight,
-                                                          at("smoothness " + name, s.time)),
-                    sm);
+        const int order = obj.smoothnessOrder;
+        addResidualAt(std::make_shared<WeightedValueKernel>(cv.dofs, obj.smoothness * s.weight,
+                                                            at("smoothness " + name, s.time)),
+                      r.event, [this, ci, r, order](InputMap& in, double T) {
+                        addMotionInputs(in, ci, r, T, order);
+                        setQuadratureScale(in, r, T);
+                      });
       }
-      if (anyLimits) {
-        InputMap lim;
-        addMotionInputs(lim, ci, s.time, 0);
-        addResidual(std::make_shared<JointLimitKernel>(cv.model, at("joint limits " + name, s.time)),
-                    lim);
-      }
+      if (anyLimits)
+        addResidualAt(std::make_shared<JointLimitKernel>(cv.model, at("joint limits " + name, s.time)),
+                      r.event, [this, ci, r](InputMap& in, double T) { addMotionInputs(in, ci, r, T, 0); });
     }
   }
 
@@ -335,53 +610,54 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const int ci = characterIndex(t.character);
     const CharacterVariables& cv = characters_[ci];
     const std::string label = toString(t.kind) + " '" + t.id + "'";
+    // A kernel at one time of this term, its inputs q^(order) for each listed order.
+    auto addAt = [&](std::shared_ptr<const Kernel> kernel, double time, std::vector<int> orders) {
+      const TimeRef r = timeRef(ci, time);
+      addResidualAt(std::move(kernel), r.event, [this, ci, r, orders](InputMap& in, double T) {
+        for (int order : orders) addMotionInputs(in, ci, r, T, order);
+      });
+    };
     switch (t.kind) {
       case TermKind::Keyframe: {
+        if (!checkOutsideWindows(ci, t.time, label, error)) return false;
         std::vector<std::pair<int, double>> targets;
         for (const auto& [dof, value] : t.values) targets.emplace_back(cv.model->dofIndex(dof), value);
-        InputMap in;
-        addMotionInputs(in, ci, t.time, 0);
-        addResidual(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), in);
+        addAt(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), t.time, {0});
         break;
       }
       case TermKind::Rest: {
-        InputMap in;
+        if (!checkOutsideWindows(ci, t.time, label, error)) return false;
         if (t.body.empty()) {
-          addMotionInputs(in, ci, t.time, 1);
           std::vector<std::pair<int, double>> targets;
           for (int d = 0; d < cv.dofs; ++d) targets.emplace_back(d, 0.0);
-          addResidual(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), in);
+          addAt(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), t.time, {1});
         } else {
-          addMotionInputs(in, ci, t.time, 0);
-          addMotionInputs(in, ci, t.time, 1);
-          addResidual(std::make_shared<BodyRestKernel>(cv.model, cv.model->bodyIndex(t.body),
-                                                       at(label, t.time)),
-                      in);
+          addAt(std::make_shared<BodyRestKernel>(cv.model, cv.model->bodyIndex(t.body), at(label, t.time)),
+                t.time, {0, 1});
         }
         break;
       }
       case TermKind::Pin: {
+        if (!checkOutsideWindows(ci, t.time, label, error) ||
+            (t.until && !checkOutsideWindows(ci, *t.until, label, error)))
+          return false;
         const std::vector<double> times =
             t.until ? intervalTimes(transcription_, t.time, *t.until) : std::vector<double>{t.time};
-        for (double time : times) {
-          InputMap in;
-          addMotionInputs(in, ci, time, 0);
-          addResidual(std::make_shared<PinKernel>(cv.model, cv.model->bodyIndex(t.body), t.point,
-                                                  t.position, t.axes, at(label, time)),
-                      in);
-        }
+        for (double time : times)
+          addAt(std::make_shared<PinKernel>(cv.model, cv.model->bodyIndex(t.body), t.point, t.position,
+                                            t.axes, at(label, time)),
+                time, {0});
         break;
       }
       case TermKind::Clearance:
+        if (!checkOutsideWindows(ci, t.start, label, error) || !checkOutsideWindows(ci, t.end, label, error))
+          return false;
         for (double time : intervalTimes(transcription_, t.start, t.end)) {
-          InputMap in;
-          addMotionInputs(in, ci, time, 0);
           const int body = cv.model->bodyIndex(t.body);
-          addResidual(t.box ? std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.boxMin,
-                                                                t.boxMax, at(label, time))
-                            : std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.height,
-                                                                at(label, time)),
-                      in);
+          addAt(t.box ? std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.boxMin, t.boxMax,
+                                                          at(label, time))
+                      : std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.height, at(label, time)),
+                time, {0});
         }
         break;
       case TermKind::Contact: break;  // below, per contact variable set
@@ -394,13 +670,18 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const int jj = static_cast<int>(j);
     const CharacterVariables& cv = characters_[ct.character];
     const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
+    if (!checkOutsideWindows(ct.character, ct.start, label, error) ||
+        !checkOutsideWindows(ct.character, ct.end, label, error))
+      return false;
     for (double time : ct.times) {
-      InputMap in;
-      addMotionInputs(in, ct.character, time, 0);
-      addAnchorInputs(in, jj);
-      addResidual(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, scene_.groundHeight,
-                                                        at(label + " anchor", time)),
-                  in);
+      const TimeRef r = timeRef(ct.character, time);
+      const int c = ct.character;
+      addResidualAt(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, scene_.groundHeight,
+                                                          at(label + " anchor", time)),
+                    r.event, [this, c, r, jj](InputMap& in, double T) {
+                      addMotionInputs(in, c, r, T, 0);
+                      addAnchorInputs(in, jj);
+                    });
     }
     const int points = static_cast<int>(ct.points.points.size());
     // Several contact points on one rigid body make their forces statically indeterminate
@@ -412,11 +693,15 @@ bool SpacetimeProblem::assemble(std::string* error) {
     // 14.4 -> 11.4 s, hurdle 12.9 -> 25.0 s.
     for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end)) {
       if (obj.contactForce <= 0 || smp.weight <= 0) continue;
-      InputMap in;
-      addForceInputs(in, jj, smp.time, 1.0 / cv.weight);  // as fractions of the weight
-      addResidual(std::make_shared<WeightedValueKernel>(ct.blockSize(), obj.contactForce * smp.weight,
-                                                        at(label + " load sharing", smp.time)),
-                  in);
+      const TimeRef r = timeRef(ct.character, smp.time);
+      const std::pair<int, double> force = ct.interpolation(smp.time);
+      const double scale = 1.0 / cv.weight;  // as fractions of the weight
+      addResidualAt(std::make_shared<WeightedValueKernel>(ct.blockSize(), obj.contactForce * smp.weight,
+                                                          at(label + " load sharing", smp.time)),
+                    r.event, [this, r, jj, force, scale](InputMap& in, double T) {
+                      addForceInputs(in, jj, force, scale);
+                      setQuadratureScale(in, r, T);
+                    });
     }
     for (double time : ct.times) {
       InputMap in;
@@ -427,7 +712,14 @@ bool SpacetimeProblem::assemble(std::string* error) {
     }
     if (ct.impact()) addImpactTerms(jj);
   }
-  return addFormulaTerms(error);
+  if (!addFormulaTerms(error)) return false;
+  for (const FreeEnd& e : freeEnds_) {
+    double* T = x_.data() + e.offset;
+    if (!problem_->HasParameterBlock(T)) continue;
+    problem_->SetParameterLowerBound(T, 0, e.lower);
+    problem_->SetParameterUpperBound(T, 0, e.upper);
+  }
+  return true;
 }
 
 std::vector<int> SpacetimeProblem::simultaneousImpacts(int j) const {
@@ -487,13 +779,6 @@ void SpacetimeProblem::addImpactTerms(int j) {
   }
 }
 
-std::vector<int> SpacetimeProblem::addSampleInputs(InputMap& in, int c, double t) {
-  const std::vector<int> active = activeContacts(c, t);
-  for (int order = 0; order < 3; ++order) addMotionInputs(in, c, t, order);
-  for (int j : active) addForceInputs(in, j, t);
-  return active;
-}
-
 std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std::vector<int>& active,
                                                                 const std::string& expression,
                                                                 std::string* error) {
@@ -516,43 +801,49 @@ std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std
 }
 
 bool SpacetimeProblem::addFormulaTerms(std::string* error) {
+  // The inputs of a formula at a sample: built once to size the kernel, then by addResidualAt.
+  auto addFormula = [&](int c, double time, const std::string& expression, RowKind kind, double scale,
+                        double value, const std::string& label, std::string* why) {
+    const SampleInputs si = sampleInputs(c, time);
+    auto tape = formulaTape(c, si.active, expression, why);
+    if (!tape) return false;
+    InputMap probe;
+    addSampleInputs(probe, si, si.ref.eventTime);
+    addResidualAt(std::make_shared<FormulaKernel>(tape, probe.rows(), time, kind, scale, value, label),
+                  si.ref.event, [this, si, kind](InputMap& in, double T) {
+                    addSampleInputs(in, si, T);
+                    if (kind == RowKind::Objective) setQuadratureScale(in, si.ref, T);
+                  });
+    return true;
+  };
   for (const TermSpec& t : scene_.terms) {
     if (!t.enabled || t.kind != TermKind::Formula) continue;
     const int c = characterIndex(t.character);
+    const std::string label = "formula '" + t.id + "'";
+    for (double e : t.interval ? std::vector<double>{t.start, t.end} : std::vector<double>{t.time})
+      if (!checkOutsideWindows(c, e, label, error)) return false;
     const std::vector<double> times =
         t.interval ? intervalTimes(transcription_, t.start, t.end) : std::vector<double>{t.time};
     for (double time : times) {
-      InputMap in;
-      const std::vector<int> active = addSampleInputs(in, c, time);
       std::string why;
-      auto tape = formulaTape(c, active, t.expression, &why);
-      if (!tape) {
+      const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
+      const double scale = t.relation == '>' ? -1.0 : 1.0;
+      if (!addFormula(c, time, t.expression, kind, scale, t.value, at(label, time), &why)) {
         *error = "term '" + t.id + "': formula \"" + t.expression + "\": " + why;
         return false;
       }
-      const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
-      const double scale = t.relation == '>' ? -1.0 : 1.0;
-      addResidual(std::make_shared<FormulaKernel>(tape, in.rows(), time, kind, scale, t.value,
-                                                  at("formula '" + t.id + "'", time)),
-                  in);
     }
   }
   for (const FormulaObjective& f : scene_.objective.formulas) {
     const int c = characterIndex(f.character);
     for (const Sample& s : transcription_.samples) {
       if (s.weight <= 0 || f.weight <= 0) continue;
-      InputMap in;
-      const std::vector<int> active = addSampleInputs(in, c, s.time);
       std::string why;
-      auto tape = formulaTape(c, active, f.expression, &why);
-      if (!tape) {
+      if (!addFormula(c, s.time, f.expression, RowKind::Objective, std::sqrt(f.weight * s.weight), 0.0,
+                      at("objective formula", s.time), &why)) {
         *error = "objective formula \"" + f.expression + "\": " + why;
         return false;
       }
-      addResidual(std::make_shared<FormulaKernel>(tape, in.rows(), s.time, RowKind::Objective,
-                                                  std::sqrt(f.weight * s.weight), 0.0,
-                                                  at("objective formula", s.time)),
-                  in);
     }
   }
   return true;
@@ -730,6 +1021,13 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
 
 int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
   int matched = 0;
+  // Free lift-off instants first: the root's breakpoints and the contacts' samples follow them.
+  for (const FreeEnd& e : freeEnds_) {
+    const std::string& id = scene_.terms[contacts_[e.contact].term].id;
+    for (const ContactVariables& old : previous.contacts())
+      if (previous.scene().terms[old.term].id == id) x_[e.offset] = std::clamp(old.end, e.lower, e.upper);
+  }
+  syncFreeEnds();
   const UniformBSpline& spline = transcription_.motion;
   const double t0 = std::max(spline.start(), previous.scene().startTime);
   const double t1 = std::min(spline.end(), previous.scene().endTime);
@@ -802,6 +1100,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
 bool SpacetimeProblem::restore(const SolutionState& s) {
   if (s.variables.size() != x_.size() || s.multipliers.size() != al_.lambda.size()) return false;
   std::copy(s.variables.begin(), s.variables.end(), x_.begin());  // parameter blocks point into x_
+  syncFreeEnds();
   al_.lambda = s.multipliers;
   if (s.rho > 0) al_.rho = s.rho;
   return true;

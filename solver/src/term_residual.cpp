@@ -13,8 +13,8 @@ int InputMap::block(double* data, int size) {
   return static_cast<int>(blocks_.size()) - 1;
 }
 
-void InputMap::add(int zRow, int blockIndex, int index, double weight) {
-  entries_.push_back({zRow, blockIndex, index, weight});
+void InputMap::add(int zRow, int blockIndex, int index, double weight, double slope) {
+  entries_.push_back({zRow, blockIndex, index, weight, slope});
 }
 
 int InputMap::newRows(int count) {
@@ -22,11 +22,15 @@ int InputMap::newRows(int count) {
   return rows_ - count;
 }
 
-Eigen::MatrixXd InputMap::matrix() const {
+Eigen::MatrixXd InputMap::matrix() const { return assemble(&Entry::weight); }
+
+Eigen::MatrixXd InputMap::slopeMatrix() const { return assemble(&Entry::slope); }
+
+Eigen::MatrixXd InputMap::assemble(double Entry::*field) const {
   std::vector<int> offset(sizes_.size() + 1, 0);
   for (size_t i = 0; i < sizes_.size(); ++i) offset[i + 1] = offset[i] + sizes_[i];
   Eigen::MatrixXd B = Eigen::MatrixXd::Zero(rows_, offset.back());
-  for (const Entry& e : entries_) B(e.row, offset[e.block] + e.index) += e.weight;
+  for (const Entry& e : entries_) B(e.row, offset[e.block] + e.index) += e.*field;
   return B;
 }
 
@@ -38,18 +42,53 @@ TermResidual::TermResidual(std::shared_ptr<const Kernel> kernel, const InputMap&
   for (int s : inputs.sizes()) mutable_parameter_block_sizes()->push_back(s);
 }
 
-Eigen::VectorXd TermResidual::inputs(double const* const* parameters) const {
+TermResidual::TermResidual(std::shared_ptr<const Kernel> kernel, MovingInputs moving,
+                           double* eventTime, const AugmentedLagrangianState* al,
+                           int firstMultiplier)
+    : kernel_(std::move(kernel)), moving_(std::move(moving)), al_(al),
+      firstMultiplier_(firstMultiplier) {
+  const InputMap inputs = moving_(*eventTime);
+  B_ = inputs.matrix();
+  blocks_ = inputs.blocks();
+  blocks_.push_back(eventTime);
+  set_num_residuals(kernel_->rowCount());
+  for (int s : inputs.sizes()) mutable_parameter_block_sizes()->push_back(s);
+  mutable_parameter_block_sizes()->push_back(1);
+}
+
+TermResidual::Map TermResidual::map(double const* const* parameters) const {
+  Map m;
+  if (!moving_) return m;
+  const InputMap inputs = moving_(parameters[parameter_block_sizes().size() - 1][0]);
+  m.moved = inputs.matrix();
+  m.slope = inputs.slopeMatrix();
+  m.scale = inputs.objectiveScale;
+  m.scaleSlope = inputs.objectiveScaleSlope;
+  return m;
+}
+
+Eigen::VectorXd TermResidual::stacked(double const* const* parameters) const {
   Eigen::VectorXd p(B_.cols());
   int k = 0;
   const auto& sizes = parameter_block_sizes();
-  for (size_t b = 0; b < sizes.size(); ++b)
+  const size_t count = sizes.size() - (moving_ ? 1 : 0);
+  for (size_t b = 0; b < count; ++b)
     for (int i = 0; i < sizes[b]; ++i) p[k++] = parameters[b][i];
-  return B_ * p;
+  return p;
+}
+
+void TermResidual::scaleObjective(double scale, double* rows) const {
+  if (scale == 1) return;
+  const auto& kinds = kernel_->rowKinds();
+  for (int r = 0; r < kernel_->rowCount(); ++r)
+    if (kinds[r] == RowKind::Objective) rows[r] *= scale;
 }
 
 void TermResidual::rawRows(double const* const* parameters, double* rows) const {
-  const Eigen::VectorXd z = inputs(parameters);
+  const Map m = map(parameters);
+  const Eigen::VectorXd z = matrix(m) * stacked(parameters);
   kernel_->evaluate(z.data(), rows);
+  scaleObjective(m.scale, rows);
 }
 
 std::vector<double> TermResidual::rawRowsNow() const {
@@ -60,7 +99,9 @@ std::vector<double> TermResidual::rawRowsNow() const {
 
 bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
                             double** jacobians) const {
-  const Eigen::VectorXd z = inputs(parameters);
+  const Map mp = map(parameters);
+  const Eigen::VectorXd p = stacked(parameters);
+  const Eigen::VectorXd z = matrix(mp) * p;
   const int m = kernel_->rowCount(), nz = kernel_->inputSize();
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Jz(m, nz);
   if (jacobians)
@@ -68,10 +109,21 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
   else
     kernel_->evaluate(z.data(), residuals);
 
+  // A moving sample's objective rows: sqrt of the quadrature weight, which changes with T.
+  const auto& kinds = kernel_->rowKinds();
+  Eigen::VectorXd scaleTerm = Eigen::VectorXd::Zero(m);  // d(scale)/dT * raw objective row
+  if (moving_) {
+    for (int r = 0; r < m; ++r)
+      if (kinds[r] == RowKind::Objective) {
+        scaleTerm[r] = mp.scaleSlope * residuals[r];
+        residuals[r] *= mp.scale;
+        if (jacobians) Jz.row(r) *= mp.scale;
+      }
+  }
+
   // Augmented-Lagrangian transform of each row: scale and (for inactive inequalities) zero.
   const double sr = std::sqrt(al_->rho);
   Eigen::VectorXd rowScale = Eigen::VectorXd::Ones(m);
-  const auto& kinds = kernel_->rowKinds();
   for (int r = 0; r < m; ++r) {
     if (!std::isfinite(residuals[r])) return false;  // Ceres rejects the step
     if (al_->projectOnly) {
@@ -93,10 +145,15 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
     }
   }
   if (!jacobians) return true;
-  const Eigen::MatrixXd Jp = rowScale.asDiagonal() * (Jz * B_);
+  const Eigen::MatrixXd Jp = rowScale.asDiagonal() * (Jz * matrix(mp));
   int col = 0;
   const auto& sizes = parameter_block_sizes();
-  for (size_t b = 0; b < sizes.size(); ++b) {
+  const size_t count = sizes.size() - (moving_ ? 1 : 0);
+  if (moving_ && jacobians[count]) {  // the event time's column
+    const Eigen::VectorXd dz = mp.slope * p;
+    Eigen::Map<Eigen::VectorXd>(jacobians[count], m) = rowScale.asDiagonal() * (Jz * dz + scaleTerm);
+  }
+  for (size_t b = 0; b < count; ++b) {
     if (jacobians[b]) {
       Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
           jacobians[b], m, sizes[b]);

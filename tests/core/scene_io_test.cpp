@@ -26,6 +26,28 @@ TEST(SceneIo, ShippedScenesLoadAndRoundTrip) {
   EXPECT_GE(count, 5);
 }
 
+// A free contact end (the lift-off instant as a variable) and its window survive a save.
+TEST(SceneIo, FreeContactEndRoundTrips) {
+  const SceneLoadResult r = loadSceneFile(std::string(kScenes) + "/luxo_jump.json");
+  ASSERT_TRUE(r.scene) << r.error;
+  Scene scene = *r.scene;
+  for (TermSpec& t : scene.terms)
+    if (t.id == "takeoff") {
+      t.freeEnd = true;
+      t.freeEndWindow = 0.05;
+    }
+  const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
+  ASSERT_TRUE(again.scene) << again.error;
+  int free = 0;
+  for (const TermSpec& t : again.scene->terms)
+    if (t.freeEnd) {
+      ++free;
+      EXPECT_EQ(t.id, "takeoff");
+      EXPECT_EQ(t.freeEndWindow, 0.05);
+    }
+  EXPECT_EQ(free, 1);
+}
+
 TEST(SceneIo, AtomicSaveThenLoad) {
   const SceneLoadResult r = loadSceneFile(kScenes + "luxo_jump.json");
   ASSERT_TRUE(r.scene) << r.error;
@@ -86,6 +108,10 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
        "terms[0].time': value 3"},
       {minimalWith(body, R"([{"id": "p", "type": "contact", "character": "c", "body": "base", "points": [[0,0,0]], "start": 0.5, "end": 0.2}])"),
        "terms[0].end'"},
+      {minimalWith(body, R"([{"id": "p", "type": "contact", "character": "c", "body": "base", "points": [[0,0,0]], "start": 0, "end": 0.5, "freeEnd": true, "freeEndWindow": 0}])"),
+       "terms[0].freeEndWindow': value 0"},
+      {minimalWith(body, R"([{"id": "p", "type": "contact", "character": "c", "body": "base", "points": [[0,0,0]], "start": 0, "end": 0.5, "freeEnd": "yes"}])"),
+       "terms[0].freeEnd'"},
       {minimalWith(R"({"id": "base", "mass": 1, "masss": 2})"), "bodies[0].masss': unknown field"},
       {minimalWith(body, "[]", R"("solution": {"variables": [1, "x"], "multipliers": []},)"),
        "solution.variables[1]': value \"x\""},

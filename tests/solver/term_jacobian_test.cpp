@@ -19,19 +19,32 @@ class TermJacobians : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(TermJacobians, MatchFiniteDifferences) {
   std::string error;
-  // "NAME:split" is the shipped scene with its landing split into one contact per point.
-  const std::string name = GetParam();
-  const bool split = name.size() > 6 && name.substr(name.size() - 6) == ":split";
-  const Scene shipped = testing::shippedScene(split ? name.substr(0, name.size() - 6) : name);
-  auto problem = SpacetimeProblem::build(split ? testing::withSplitLanding(shipped) : shipped, &error);
+  // "NAME:split" is the shipped scene with its landing split into one contact per point;
+  // "NAME:free" the same with a free take-off end (the lift-off instant a variable) and three
+  // samples per interval (root curves with a bubble).
+  const std::string param = GetParam();
+  const std::string name = param.substr(0, param.find(':'));
+  const std::string variant = param.size() > name.size() ? param.substr(name.size() + 1) : "";
+  Scene scene = testing::shippedScene(name);
+  if (variant == "split") scene = testing::withSplitLanding(scene);
+  if (variant == "free") {
+    scene.transcription.samplesPerSegment = 3;
+    for (TermSpec& t : scene.terms)
+      if (t.kind == TermKind::Contact && t.start == scene.startTime) t.freeEnd = true;
+  }
+  auto problem = SpacetimeProblem::build(scene, &error);
   ASSERT_TRUE(problem) << error;
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.05);
   for (double& x : problem->variables()) x += noise(rng);
+  // A lift-off instant moves within its window, away from where the problem was built.
+  for (const FreeEnd& e : problem->freeEnds())
+    problem->variables()[e.offset] = e.current + 0.6 * (e.upper - e.current);
+  EXPECT_EQ(problem->freeEnds().size(), variant == "free" ? 1u : 0u);
   AugmentedLagrangianState& al = problem->augmentedLagrangian();
   al.rho = 7.0;
   for (double& l : al.lambda) l = noise(rng) * 10;
-  int checked = 0;
+  int checked = 0, movingChecked = 0;
   std::set<std::string> kinds;
   for (const TermResidual* res : problem->residuals()) {
     const int m = res->num_residuals();
@@ -61,8 +74,10 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
           if (!smooth[row]) continue;
           const double fd = (rp[row] - rm[row]) / (2 * h);
           const double an = jac[b][row * sizes[b] + i];
-          EXPECT_NEAR(an, fd, 1e-5 * (1 + std::abs(fd))) << res->kernel().label() << " row " << row;
+          EXPECT_NEAR(an, fd, 1e-5 * (1 + std::abs(fd))) << res->kernel().label() << " row " << row
+                                                          << " block " << b;
           ++checked;
+          if (res->moving() && b + 1 == sizes.size() && an != 0) ++movingChecked;
         }
       }
     }
@@ -72,11 +87,14 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
   const bool luxo = std::string(GetParam()).rfind("luxo", 0) == 0;
   EXPECT_GT(checked, luxo ? 5000 : 500);
   EXPECT_GE(kinds.size(), luxo ? 7u : 2u);
+  // The lift-off instant's column: every kind of term in the window depends on it.
+  if (variant == "free") EXPECT_GT(movingChecked, 50);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, TermJacobians,
                          ::testing::Values("luxo_jump.json", "luxo_3d.json", "particle_gravity.json",
-                                           "luxo_jump.json:split"));
+                                           "luxo_jump.json:split", "luxo_jump.json:free",
+                                           "luxo_3d.json:free"));
 
 }  // namespace
 }  // namespace spacetime

@@ -219,6 +219,10 @@ void ConstraintsPanel::termForm(const std::string& id) {
       // after the clip's start; off, the points must already be at rest when it begins.
       form_->addBool(tr("Impact at start"), [get](const Scene& s) { return get(s).impact; },
                      [edit](Scene& s, bool v) { edit(s, [&](TermSpec& t) { t.impact = v; }); });
+      // The solver chooses the lift-off instant near End (within the collocation intervals
+      // either side of it) instead of holding the points down exactly until End.
+      form_->addBool(tr("Free lift-off"), [get](const Scene& s) { return get(s).freeEnd; },
+                     [edit](Scene& s, bool v) { edit(s, [&](TermSpec& t) { t.freeEnd = v; }); });
       for (size_t k = 0; k < term.points.size(); ++k)
         form_->addVector(tr("Point %1").arg(k + 1),
                          [get, k](const Scene& s) { return k < get(s).points.size() ? get(s).points[k] : Eigen::Vector3d::Zero().eval(); },

@@ -28,6 +28,9 @@ struct SolverOptions {
   double maxSeconds = 300;       // wall-clock budget of the whole solve
   int threads = 1;               // Ceres evaluation threads
   bool warmStart = false;        // keep the problem's current multipliers and penalty
+  // Free contact ends (lift-off instants) stay where they are until the constraints are within
+  // this: far from feasibility the effort alone would drag them to a bound of their window.
+  double releaseFreeEndsAt = 1e-4;
 
   std::string validate() const;  // empty if valid, else what is wrong
 };

@@ -8,6 +8,16 @@
 // actuated ones enter the objective), a small smoothness integrand and joint limits; pins,
 // keyframes, rests, contacts (anchored points, forces in the friction cone), clearances and
 // formula terms at their times.
+//
+// Free contact ends (the scene's `freeEnd`): the lift-off instant T of such a contact is one
+// more variable. The root's breakpoint at the contact's end becomes T, inside a window
+// [left, right] of root breakpoints around it (the scene's `freeEndWindow` either side); the
+// window's breakpoints and collocation samples before T keep their places relative to
+// [left, T], those after it relative to [T, right] (a two-phase time scaling), so they move
+// with T, and every residual imposed at one of them is rebuilt from T at each evaluation
+// (TermResidual's moving inputs, with exact slopes). The problem's times (breakpoints, samples, the contact's end and
+// sample times) are brought to the solved T by syncFreeEnds, which the solver calls when it
+// stops and restore() calls.
 #pragma once
 
 #include <ceres/problem.h>
@@ -73,6 +83,32 @@ struct GroupBasis {
   std::array<double, kCapacity> weight{};
 };
 
+// A time at which a residual is imposed. Inside a free end's window it moves with the event's
+// instant T: t(T) = time + rate (T - eventTime), and it stays in the root interval `interval`.
+struct TimeRef {
+  double time = 0;
+  double rate = 0;        // dt/dT: 1 at the event itself, 0 at the window's ends
+  int event = -1;         // index into SpacetimeProblem::freeEnds(); -1: a fixed time
+  double eventTime = 0;   // T at which t = time
+  int interval = -1;      // root interval holding it (event refs of floating characters)
+  double intervalStart = 0, intervalEnd = 0;  // its ends when T = eventTime
+  int side = 0;           // -1: in [left, T), +1: in (T, right], 0: at T
+  double at(double T) const { return event < 0 ? time : time + rate * (T - eventTime); }
+};
+
+// A free contact end: the lift-off instant of contacts()[contact] is variables()[offset],
+// bounded to [lower, upper] inside the window [left, right] of root breakpoints around it.
+// Breakpoints are shared, so every character's times in the window move with it.
+struct FreeEnd {
+  int contact = -1, character = -1;
+  int offset = 0;
+  double left = 0, right = 0, lower = 0, upper = 0;
+  double current = 0;  // the instant the problem's times reflect (see syncFreeEnds)
+  // Where a time t0 of the window at T = from lies at T = to, and its rate d/dT.
+  double map(double t0, double from, double to) const;
+  double rate(double t0, double from) const;
+};
+
 struct CharacterVariables {
   std::shared_ptr<const Model<double>> model;
   int dofs = 0;
@@ -98,6 +134,7 @@ struct ContactVariables {
   // and the points receive a ground impulse (blockSize() values, N s, world axes).
   int impulseOffset = -1;  // -1: no impact
   bool impact() const { return impulseOffset >= 0; }
+  int freeEnd = -1;  // index into SpacetimeProblem::freeEnds() if the end is a variable
   int blockSize() const { return forceDims * static_cast<int>(points.points.size()); }
   int sampleIndex(double t) const;  // -1 if t is not one of `times`
   // The sample at or before t and the weight of the next one (forces are linear between
@@ -121,6 +158,10 @@ class SpacetimeProblem {
   const Transcription& transcription() const { return transcription_; }
   const std::vector<CharacterVariables>& characters() const { return characters_; }
   const std::vector<ContactVariables>& contacts() const { return contacts_; }
+  const std::vector<FreeEnd>& freeEnds() const { return freeEnds_; }
+  // Moves the problem's times (root breakpoints, samples and their weights, contact ends and
+  // sample times) to the free ends' current values; residuals need no update.
+  void syncFreeEnds();
   ceres::Problem& ceresProblem() { return *problem_; }
   const std::vector<TermResidual*>& residuals() const { return residuals_; }
   AugmentedLagrangianState& augmentedLagrangian() { return al_; }
@@ -165,10 +206,22 @@ class SpacetimeProblem {
   bool assemble(std::string* error);
   void initialGuess();
   void addResidual(std::shared_ptr<const Kernel> kernel, const InputMap& inputs);
+  // A residual whose inputs `fill` builds at the event time T of free end `event`: built once
+  // when event < 0, rebuilt at every evaluation otherwise.
+  using Fill = std::function<void(InputMap&, double T)>;
+  void addResidualAt(std::shared_ptr<const Kernel> kernel, int event, const Fill& fill);
+  // The time reference of t for character c (see TimeRef): moving inside a free end's window.
+  TimeRef timeRef(int character, double t) const;
   // Input map helpers: append z rows for a character's q^(order)(t), a contact's forces at t,
   // the anchors.
   void addMotionInputs(InputMap& in, int character, double t, int order, bool before = false);
+  void addMotionInputs(InputMap& in, int character, const TimeRef& r, double T, int order);
   void addForceInputs(InputMap& in, int contact, double t, double scale = 1.0);
+  // Forces at a contact's sample i, or between samples i and i + 1 with weight a on the next
+  // (fixed when the sample moves: forces are per-sample variables).
+  void addForceInputs(InputMap& in, int contact, std::pair<int, double> at, double scale = 1.0);
+  // Objective rows of a moving sample scale with the square root of its interval's length.
+  void setQuadratureScale(InputMap& in, const TimeRef& r, double T) const;
   void addAnchorInputs(InputMap& in, int contact);
   // z rows equal to (scale times) the variables x[offset .. offset + size).
   void addBlockInputs(InputMap& in, int offset, int size, double scale = 1.0);
@@ -177,13 +230,37 @@ class SpacetimeProblem {
   // `before`, the interval that ends at t (the state just before an impact).
   GroupBasis groupBasis(int character, const DofGroup& g, double t, int order,
                         bool before = false) const;
+  // The root interval holding t (the rule of groupBasis).
+  int hermiteInterval(int character, const DofGroup& g, double t, bool before) const;
+  // The basis of a Hermite group's interval k = [a, b] at t, and in `slope` its derivative in
+  // the event time T given dt/dT, da/dT and db/dT.
+  GroupBasis hermiteBasis(const DofGroup& g, int k, double a, double b, double t, int order,
+                          double rate, double da, double db, GroupBasis* slope) const;
+  // The basis of a group at a (possibly moving) time with the event at T, and its slope in T.
+  GroupBasis groupBasisAt(int character, const DofGroup& g, const TimeRef& r, double T,
+                          int order, GroupBasis* slope) const;
+  // The character's root (Hermite) group, or null.
+  const DofGroup* rootGroup(int character) const;
+  // Lays out the free ends' variables from *size on (after the contacts).
+  bool addFreeEnds(std::string* error, int* size);
+  // An error if a term's instant t lies strictly inside a free end's window (other than at the
+  // free end itself).
+  bool checkOutsideWindows(int character, double t, const std::string& label, std::string* error) const;
   void addImpactTerms(int contact);
   // Sets a Hermite group's bubbles so that the group interpolates target(t) (a full joint
   // vector) at interior points of each interval, its breakpoint data already set.
   void fitBubbles(int character, const DofGroup& g, const std::function<Eigen::VectorXd(double)>& target);
   Eigen::VectorXd jointStateOnSide(int character, double t, int order, bool before) const;
-  // Inputs of a sample (q, qd, qdd, active contacts' forces) and the active contacts.
-  std::vector<int> addSampleInputs(InputMap& in, int character, double t);
+  // What a sample's inputs are made of, fixed when the problem is built: its time, the active
+  // contacts and where their forces are read.
+  struct SampleInputs {
+    int character = 0;
+    TimeRef ref;
+    std::vector<int> active;
+    std::vector<std::pair<int, double>> forces;
+  };
+  SampleInputs sampleInputs(int character, double t) const;
+  void addSampleInputs(InputMap& in, const SampleInputs& s, double T);
   // A formula of character c compiled for the given active contacts (cached); null and an
   // error on a bad formula.
   std::shared_ptr<const expr::Tape> formulaTape(int character, const std::vector<int>& active,
@@ -194,6 +271,7 @@ class SpacetimeProblem {
   Transcription transcription_;
   std::vector<CharacterVariables> characters_;
   std::vector<ContactVariables> contacts_;
+  std::vector<FreeEnd> freeEnds_;
   std::vector<double> x_;
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<TermResidual*> residuals_;

@@ -7,11 +7,18 @@
 // inequalities): objective rows pass through; an equality c becomes sqrt(rho) (c + lambda/rho);
 // an inequality g <= 0 becomes sqrt(rho) max(0, g + lambda/rho). Half the sum of squares is
 // then f + lambda.c + rho/2 |c|^2 up to a constant, which Ceres minimises.
+//
+// A residual near a free contact end (a lift-off instant the solver chooses, see
+// spacetime_problem.h) has times that move with that instant T: its map B(T) is rebuilt at every
+// evaluation from T, with its slope B'(T), and T is one more parameter block; the column of T
+// is J_z B'(T) p (plus the change of the quadrature weight of objective rows), so the chain
+// rule stays exact.
 #pragma once
 
 #include <ceres/cost_function.h>
 
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -34,8 +41,9 @@ class InputMap {
  public:
   // Adds a parameter block (deduplicated) and returns its index.
   int block(double* data, int size);
-  // z[zRow] += weight * block[b][index]
-  void add(int zRow, int blockIndex, int index, double weight);
+  // z[zRow] += weight * block[b][index]; `slope` is d weight / dT for a map that moves with an
+  // event time T (zero otherwise).
+  void add(int zRow, int blockIndex, int index, double weight, double slope = 0);
   // Appends `count` new z rows and returns the first.
   int newRows(int count);
 
@@ -43,21 +51,35 @@ class InputMap {
   const std::vector<double*>& blocks() const { return blocks_; }
   const std::vector<int>& sizes() const { return sizes_; }
   Eigen::MatrixXd matrix() const;
+  Eigen::MatrixXd slopeMatrix() const;
+
+  // Objective rows are scaled by this factor (and its slope in T): a moving sample's quadrature
+  // weight changes with the length of its interval, and objective rows carry sqrt(weight).
+  double objectiveScale = 1, objectiveScaleSlope = 0;
 
  private:
   struct Entry {
     int row, block, index;
-    double weight;
+    double weight, slope;
   };
+  Eigen::MatrixXd assemble(double Entry::*field) const;  // B from one of the entries' fields
   std::vector<double*> blocks_;
   std::vector<int> sizes_;
   std::vector<Entry> entries_;
   int rows_ = 0;
 };
 
+// Rebuilds a moving residual's input map at the event time T. It must register the same
+// parameter blocks in the same order at every T.
+using MovingInputs = std::function<InputMap(double T)>;
+
 class TermResidual : public ceres::CostFunction {
  public:
   TermResidual(std::shared_ptr<const Kernel> kernel, const InputMap& inputs,
+               const AugmentedLagrangianState* al, int firstMultiplier);
+  // A residual whose times move with the event time held in *eventTime (the last parameter
+  // block, of size 1).
+  TermResidual(std::shared_ptr<const Kernel> kernel, MovingInputs moving, double* eventTime,
                const AugmentedLagrangianState* al, int firstMultiplier);
 
   bool Evaluate(double const* const* parameters, double* residuals,
@@ -71,11 +93,23 @@ class TermResidual : public ceres::CostFunction {
   const Kernel& kernel() const { return *kernel_; }
   const std::vector<double*>& blocks() const { return blocks_; }
   int firstMultiplier() const { return firstMultiplier_; }
+  bool moving() const { return static_cast<bool>(moving_); }
 
  private:
-  Eigen::VectorXd inputs(double const* const* parameters) const;
+  // The map at the given parameters: B, its slope in T, the objective rows' scale and slope.
+  struct Map {
+    Eigen::MatrixXd moved, slope;  // B(T) and B'(T) of a moving residual
+    double scale = 1, scaleSlope = 0;
+  };
+  // B: the constant map, or a moving residual's B(T).
+  const Eigen::MatrixXd& matrix(const Map& m) const { return moving_ ? m.moved : B_; }
+  Map map(double const* const* parameters) const;
+  Eigen::VectorXd stacked(double const* const* parameters) const;  // p: the blocks but T
+  // Scales the objective rows of raw kernel rows.
+  void scaleObjective(double scale, double* rows) const;
 
   std::shared_ptr<const Kernel> kernel_;
+  MovingInputs moving_;
   Eigen::MatrixXd B_;
   std::vector<double*> blocks_;
   const AugmentedLagrangianState* al_;

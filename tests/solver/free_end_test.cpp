@@ -1,0 +1,138 @@
+// Free contact ends: the lift-off instant as a variable (scene field `freeEnd`). Its derivatives
+// are checked with every other term's in term_jacobian_test.cpp; here: the time scaling it
+// implies (every time of its window follows it, the quadrature still integrates exactly), the
+// errors for scenes it cannot hold, and the Luxo jump solved with it against the same jump with
+// the lift-off fixed.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../shipped_scene.h"
+#include "solver/augmented_lagrangian.h"
+#include "solver/validity.h"
+
+namespace spacetime {
+namespace {
+
+Scene freeTakeOff(Scene scene = testing::shippedScene("luxo_jump.json")) {
+  for (TermSpec& t : scene.terms)
+    if (t.id == "takeoff") t.freeEnd = true;
+  return scene;
+}
+
+// Moving the lift-off keeps the layout consistent: samples stay sorted and inside their root
+// intervals, the quadrature weights still sum to the clip's length (so the effort integral
+// stays a quadrature of the same integrand), and the contact ends where the variable says.
+TEST(FreeEnd, MovesEveryTimeOfItsWindowConsistently) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(freeTakeOff(), &error);
+  ASSERT_TRUE(problem) << error;
+  ASSERT_EQ(problem->freeEnds().size(), 1u);
+  const FreeEnd e = problem->freeEnds()[0];
+  EXPECT_NEAR(e.current, 0.4, 1e-12);
+  EXPECT_LT(e.left, e.lower);
+  EXPECT_LT(e.upper, e.right);
+  const double duration = problem->scene().endTime - problem->scene().startTime;
+  for (double T : {e.lower, 0.37, e.upper, 0.4}) {
+    const std::vector<Sample> before = problem->transcription().samples;
+    const double was = problem->freeEnds()[0].current;
+    problem->variables()[e.offset] = T;
+    problem->syncFreeEnds();
+    const Transcription& tr = problem->transcription();
+    double sum = 0;
+    for (const Sample& s : tr.samples) sum += s.weight;
+    EXPECT_NEAR(sum, duration, 1e-12) << T;
+    EXPECT_TRUE(std::is_sorted(tr.samples.begin(), tr.samples.end(),
+                               [](const Sample& a, const Sample& b) { return a.time < b.time; }));
+    // Each sample keeps its relative place in [left, T] or [T, right]; outside, it stays put.
+    for (size_t i = 0; i < before.size(); ++i) {
+      const double t0 = before[i].time, t = tr.samples[i].time;
+      if (t0 <= e.left || t0 >= e.right) EXPECT_EQ(t, t0);
+      else if (t0 < was - 1e-9) EXPECT_NEAR((t - e.left) / (T - e.left), (t0 - e.left) / (was - e.left), 1e-12);
+      else if (t0 > was + 1e-9) EXPECT_NEAR((e.right - t) / (e.right - T), (e.right - t0) / (e.right - was), 1e-12);
+      else EXPECT_NEAR(t, T, 1e-12);
+    }
+    const ContactVariables& takeoff = problem->contacts()[0];
+    EXPECT_NEAR(takeoff.end, T, 1e-12);
+    EXPECT_NEAR(takeoff.times.back(), T, 1e-12);
+    EXPECT_EQ(problem->flightPhases(0).front().first, takeoff.end);
+    const std::vector<double>& breaks = problem->characters()[0].groups[1].breaks;
+    EXPECT_EQ(std::count_if(breaks.begin(), breaks.end(), [&](double b) { return std::abs(b - T) < 1e-12; }), 1);
+  }
+}
+
+TEST(FreeEnd, RejectsScenesItCannotHold) {
+  std::string error;
+  // A keyframe strictly inside the lift-off window would change root interval as T moves.
+  Scene inside = freeTakeOff();
+  TermSpec key = inside.terms[0];
+  key.id = "crouch";
+  key.time = 0.37;
+  inside.terms.push_back(key);
+  EXPECT_FALSE(SpacetimeProblem::build(inside, &error));
+  EXPECT_NE(error.find("keyframe 'crouch'"), std::string::npos) << error;
+  EXPECT_NE(error.find("lift-off window"), std::string::npos) << error;
+  // A contact that lasts to the clip's end has nothing to lift off from.
+  Scene landing = testing::shippedScene("luxo_jump.json");
+  for (TermSpec& t : landing.terms)
+    if (t.id == "landing") t.freeEnd = true;
+  EXPECT_FALSE(SpacetimeProblem::build(landing, &error));
+  EXPECT_NE(error.find("term 'landing'"), std::string::npos) << error;
+  // The particle has no floating root for the lift-off to move.
+  Scene particle = testing::shippedScene("particle.json");
+  TermSpec contact;
+  contact.id = "stand";
+  contact.kind = TermKind::Contact;
+  contact.character = particle.characters[0].id;
+  contact.body = particle.characters[0].bodies[0].id;
+  contact.points = {Eigen::Vector3d::Zero()};
+  contact.start = 0;
+  contact.end = 0.5;
+  contact.freeEnd = true;
+  particle.groundEnabled = true;
+  particle.terms.push_back(contact);
+  EXPECT_FALSE(SpacetimeProblem::build(particle, &error));
+  EXPECT_NE(error.find("floating character"), std::string::npos) << error;
+}
+
+// The Luxo jump with its take-off's end free converges, leaves the ground at an instant of its
+// own choosing inside the window, and needs less effort than the same jump held down until the
+// scene's end (the fixed instant is one point of the free problem's feasible set). Physics, contact
+// and flight are re-checked by the validity report on the times the solve moved.
+TEST(FreeEnd, LuxoChoosesItsLiftOffAndSpendsLessEffort) {
+  std::string error;
+  SolverSummary fixedSummary, freeSummary;
+  const Scene fixedScene = testing::shippedScene("luxo_jump.json");
+  auto fixed = SpacetimeProblem::build(fixedScene, &error);
+  ASSERT_TRUE(fixed) << error;
+  SolverOptions options = solverOptionsFor(fixedScene.solver);
+  options.threads = 2;
+  fixedSummary = solveSpacetime(*fixed, options);
+  ASSERT_TRUE(fixedSummary.converged) << fixedSummary.reason;
+
+  auto free = SpacetimeProblem::build(freeTakeOff(), &error);
+  ASSERT_TRUE(free) << error;
+  freeSummary = solveSpacetime(*free, options);
+  ASSERT_TRUE(freeSummary.converged) << freeSummary.reason << " worst " << freeSummary.worstConstraint;
+  const FreeEnd& e = free->freeEnds()[0];
+  const double liftOff = free->variables()[e.offset];
+  EXPECT_EQ(free->contacts()[0].end, liftOff);
+  EXPECT_GT(std::abs(liftOff - 0.4), 1e-3);
+  EXPECT_GT(liftOff, e.lower + 1e-4);  // an interior optimum, not a bound
+  EXPECT_LT(liftOff, e.upper - 1e-4);
+  EXPECT_LT(freeSummary.objective, fixedSummary.objective);
+
+  const ValidityReport v = checkValidity(*free);
+  EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);  // at the moved samples
+  EXPECT_LT(v.maxContactPenetration, 1e-6);
+  EXPECT_LT(v.maxContactSlip, 1e-6);
+  EXPECT_TRUE(v.contactsPushOnly);
+  EXPECT_TRUE(v.contactsInFrictionCone);
+  ASSERT_EQ(v.flights.size(), 1u);
+  EXPECT_EQ(v.flights[0].start, liftOff);
+  EXPECT_GE(v.flights[0].maxRootLift, 0.05);
+}
+
+}  // namespace
+}  // namespace spacetime
