@@ -174,6 +174,11 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // standing lamp, 164 instead of 253 Levenberg-Marquardt iterations.
   co.initial_trust_region_radius = 1e10;
   co.use_nonmonotonic_steps = true;
+  // Bounds (free contact ends) make Ceres follow every step with a projected Armijo line search
+  // that re-evaluates the Jacobian; its steps are projected onto the bounds without it. Measured
+  // on luxo_jump with a free lift-off (2 threads): 80.0 s, 4796 iterations with the line search,
+  // 20.0 s, 3903 iterations without, the same optimum (objective 16.8563).
+  co.max_num_line_search_step_size_iterations = 0;
   ProgressForwarder forwarder(problem, callback, cancel, start, options.maxSeconds);
   co.callbacks.push_back(&forwarder);
 
