@@ -12,8 +12,6 @@
 namespace spacetime {
 namespace {
 
-// Two instants closer than this are the same (contact edges, samples, breakpoints).
-constexpr double kTimeTolerance = 1e-9;
 
 std::string at(const std::string& what, double t) {
   std::ostringstream s;
@@ -214,45 +212,6 @@ GroupBasis SpacetimeProblem::groupBasisAt(int c, const DofGroup& g, const TimeRe
                       e.rate(r.intervalStart, r.eventTime), e.rate(r.intervalEnd, r.eventTime), slope);
 }
 
-double FreeEnd::map(double t0, double from, double to) const {
-  if (std::abs(t0 - from) < kTimeTolerance) return to;
-  if (t0 <= left || t0 >= right) return t0;
-  if (t0 < from) return left + (t0 - left) * (to - left) / (from - left);
-  return to + (t0 - from) * (right - to) / (right - from);
-}
-
-double FreeEnd::rate(double t0, double from) const {
-  if (std::abs(t0 - from) < kTimeTolerance) return 1;
-  if (t0 <= left || t0 >= right) return 0;
-  return t0 < from ? (t0 - left) / (from - left) : (right - t0) / (right - from);
-}
-
-TimeRef SpacetimeProblem::timeRef(int c, double t) const {
-  TimeRef r;
-  r.time = t;
-  const DofGroup* g = rootGroup(c);
-  const int k = g ? hermiteInterval(c, *g, t, false) : -1;
-  for (size_t i = 0; i < freeEnds_.size(); ++i) {
-    const FreeEnd& e = freeEnds_[i];
-    if (t < e.left - kTimeTolerance || t > e.right + kTimeTolerance) continue;
-    TimeRef m = r;
-    m.event = static_cast<int>(i);
-    m.eventTime = e.current;
-    m.rate = e.rate(t, e.current);
-    m.side = std::abs(t - e.current) < kTimeTolerance ? 0 : t < e.current ? -1 : 1;
-    m.interval = k;
-    if (g) {
-      m.intervalStart = g->breaks[k];
-      m.intervalEnd = g->breaks[k + 1];
-    }
-    // A time at the window's end moves nothing unless its root interval lies inside the window.
-    const bool moves = m.rate > 0 || (g && (e.rate(m.intervalStart, e.current) > 0 ||
-                                            e.rate(m.intervalEnd, e.current) > 0));
-    if (moves) return m;
-  }
-  return r;
-}
-
 void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order, bool before) {
   const CharacterVariables& cv = characters_[c];
   const int row0 = in.newRows(cv.dofs);
@@ -374,104 +333,6 @@ void SpacetimeProblem::addResidualAt(std::shared_ptr<const Kernel> kernel, int e
                                     x_.data() + freeEnds_[event].offset, &al_, first);
   problem_->AddResidualBlock(residual, nullptr, residual->blocks());
   residuals_.push_back(residual);
-}
-
-bool SpacetimeProblem::addFreeEnds(std::string* error, int* size) {
-  for (size_t j = 0; j < contacts_.size(); ++j) {
-    ContactVariables& ct = contacts_[j];
-    const TermSpec& spec = scene_.terms[ct.term];
-    if (!spec.freeEnd) continue;
-    const std::string label = "term '" + spec.id + "': a free end (freeEnd)";
-    const DofGroup* g = rootGroup(ct.character);
-    if (!g) {
-      *error = label + " needs a floating character: lifting off moves its root";
-      return false;
-    }
-    if (ct.end >= scene_.endTime - kTimeTolerance) {
-      *error = label + " needs a contact that ends before the clip does";
-      return false;
-    }
-    // The window: the root breakpoints at least freeEndWindow before and after the end.
-    const auto& tb = transcription_.breakpoints;
-    const double w = std::max(spec.freeEndWindow, kTimeTolerance);
-    FreeEnd e;
-    e.contact = static_cast<int>(j);
-    e.character = ct.character;
-    e.left = tb.front();
-    e.right = tb.back();
-    for (double b : tb) {
-      if (b <= ct.end - w + kTimeTolerance) e.left = b;
-    }
-    for (auto b = tb.rbegin(); b != tb.rend(); ++b)
-      if (*b >= ct.end + w - kTimeTolerance) e.right = *b;
-    e.current = ct.end;
-    // Keep each side of the window at least a fifth of its length.
-    e.lower = e.left + 0.2 * (ct.end - e.left);
-    e.upper = e.right - 0.2 * (e.right - ct.end);
-    if (ct.start > e.left + kTimeTolerance) {
-      *error = label + " needs the contact to cover the root interval before its end (it starts at " +
-               std::to_string(ct.start) + " s, the interval at " + std::to_string(e.left) + " s)";
-      return false;
-    }
-    for (const FreeEnd& other : freeEnds_)
-      if (other.left < e.right - kTimeTolerance && e.left < other.right - kTimeTolerance) {
-        *error = label + " lies too close to the free end of term '" +
-                 scene_.terms[contacts_[other.contact].term].id + "': their windows (" +
-                 std::to_string(other.left) + "-" + std::to_string(other.right) + " s and " +
-                 std::to_string(e.left) + "-" + std::to_string(e.right) + " s) overlap";
-        return false;
-      }
-    for (const ContactVariables& other : contacts_)
-      if (other.impact() && other.start > e.left - kTimeTolerance && other.start < e.right + kTimeTolerance) {
-        *error = label + " has a touch-down inside its window (" + std::to_string(e.left) + "-" +
-                 std::to_string(e.right) + " s)";
-        return false;
-      }
-    e.offset = (*size)++;
-    ct.freeEnd = static_cast<int>(freeEnds_.size());
-    freeEnds_.push_back(e);
-  }
-  return true;
-}
-
-bool SpacetimeProblem::checkOutsideWindows(int c, double t, const std::string& label,
-                                           std::string* error) const {
-  (void)c;  // breakpoints are shared: every character's times move with a free end
-  for (const FreeEnd& e : freeEnds_)
-    if (t > e.left + kTimeTolerance && t < e.right - kTimeTolerance &&
-        std::abs(t - e.current) > kTimeTolerance) {
-      *error = label + " at t=" + std::to_string(t) + " lies inside the lift-off window (" +
-               std::to_string(e.left) + "-" + std::to_string(e.right) + " s) of the free end of term '" +
-               scene_.terms[contacts_[e.contact].term].id +
-               "': move it out of the window or onto the contact's end";
-      return false;
-    }
-  return true;
-}
-
-void SpacetimeProblem::syncFreeEnds() {
-  for (FreeEnd& e : freeEnds_) {
-    const double T = x_[e.offset], was = e.current;
-    if (T == was) continue;
-    auto same = [&](double t) { return std::abs(t - was) < kTimeTolerance; };
-    auto move = [&](double t) { return e.map(t, was, T); };
-    for (CharacterVariables& cv : characters_)
-      for (DofGroup& g : cv.groups)
-        if (g.hermite)
-          for (double& b : g.breaks) b = move(b);
-    for (double& b : transcription_.breakpoints) b = move(b);
-    for (Sample& smp : transcription_.samples) {
-      if (smp.time > e.left && smp.time < was && !same(smp.time)) smp.weight *= (T - e.left) / (was - e.left);
-      if (smp.time > was && smp.time < e.right && !same(smp.time)) smp.weight *= (e.right - T) / (e.right - was);
-      smp.time = move(smp.time);
-    }
-    for (ContactVariables& ct : contacts_) {
-      ct.start = move(ct.start);
-      ct.end = move(ct.end);
-      for (double& t : ct.times) t = move(t);
-    }
-    e.current = T;
-  }
 }
 
 SpacetimeProblem::SampleInputs SpacetimeProblem::sampleInputs(int c, double t) const {
@@ -619,14 +480,14 @@ bool SpacetimeProblem::assemble(std::string* error) {
     };
     switch (t.kind) {
       case TermKind::Keyframe: {
-        if (!checkOutsideWindows(ci, t.time, label, error)) return false;
+        if (!checkOutsideWindows(t.time, label, error)) return false;
         std::vector<std::pair<int, double>> targets;
         for (const auto& [dof, value] : t.values) targets.emplace_back(cv.model->dofIndex(dof), value);
         addAt(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), t.time, {0});
         break;
       }
       case TermKind::Rest: {
-        if (!checkOutsideWindows(ci, t.time, label, error)) return false;
+        if (!checkOutsideWindows(t.time, label, error)) return false;
         if (t.body.empty()) {
           std::vector<std::pair<int, double>> targets;
           for (int d = 0; d < cv.dofs; ++d) targets.emplace_back(d, 0.0);
@@ -638,8 +499,8 @@ bool SpacetimeProblem::assemble(std::string* error) {
         break;
       }
       case TermKind::Pin: {
-        if (!checkOutsideWindows(ci, t.time, label, error) ||
-            (t.until && !checkOutsideWindows(ci, *t.until, label, error)))
+        if (!checkOutsideWindows(t.time, label, error) ||
+            (t.until && !checkOutsideWindows(*t.until, label, error)))
           return false;
         const std::vector<double> times =
             t.until ? intervalTimes(transcription_, t.time, *t.until) : std::vector<double>{t.time};
@@ -650,7 +511,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
         break;
       }
       case TermKind::Clearance:
-        if (!checkOutsideWindows(ci, t.start, label, error) || !checkOutsideWindows(ci, t.end, label, error))
+        if (!checkOutsideWindows(t.start, label, error) || !checkOutsideWindows(t.end, label, error))
           return false;
         for (double time : intervalTimes(transcription_, t.start, t.end)) {
           const int body = cv.model->bodyIndex(t.body);
@@ -670,8 +531,8 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const int jj = static_cast<int>(j);
     const CharacterVariables& cv = characters_[ct.character];
     const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
-    if (!checkOutsideWindows(ct.character, ct.start, label, error) ||
-        !checkOutsideWindows(ct.character, ct.end, label, error))
+    if (!checkOutsideWindows(ct.start, label, error) ||
+        !checkOutsideWindows(ct.end, label, error))
       return false;
     for (double time : ct.times) {
       const TimeRef r = timeRef(ct.character, time);
@@ -821,7 +682,7 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
     const int c = characterIndex(t.character);
     const std::string label = "formula '" + t.id + "'";
     for (double e : t.interval ? std::vector<double>{t.start, t.end} : std::vector<double>{t.time})
-      if (!checkOutsideWindows(c, e, label, error)) return false;
+      if (!checkOutsideWindows(e, label, error)) return false;
     const std::vector<double> times =
         t.interval ? intervalTimes(transcription_, t.start, t.end) : std::vector<double>{t.time};
     for (double time : times) {

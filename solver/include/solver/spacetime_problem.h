@@ -15,9 +15,9 @@
 // window's breakpoints and collocation samples before T keep their places relative to
 // [left, T], those after it relative to [T, right] (a two-phase time scaling), so they move
 // with T, and every residual imposed at one of them is rebuilt from T at each evaluation
-// (TermResidual's moving inputs, with exact slopes). The problem's times (breakpoints, samples, the contact's end and
-// sample times) are brought to the solved T by syncFreeEnds, which the solver calls when it
-// stops and restore() calls.
+// (TermResidual's moving inputs, with exact slopes). The problem's times (breakpoints, samples,
+// the contact's end and sample times) are brought to the solved T by syncFreeEnds, which the
+// solver calls when it stops and restore() calls. The window's code is in free_ends.cpp.
 #pragma once
 
 #include <ceres/problem.h>
@@ -37,6 +37,9 @@
 #include "solver/transcription.h"
 
 namespace spacetime {
+
+// Two instants closer than this are the same (contact edges, samples, breakpoints).
+inline constexpr double kTimeTolerance = 1e-9;
 
 // Degrees of freedom are split in two groups.
 // - Actuated dofs: uniform cubic B-splines (C2) at the scene's control-point rate; their shape
@@ -245,7 +248,7 @@ class SpacetimeProblem {
   bool addFreeEnds(std::string* error, int* size);
   // An error if a term's instant t lies strictly inside a free end's window (other than at the
   // free end itself).
-  bool checkOutsideWindows(int character, double t, const std::string& label, std::string* error) const;
+  bool checkOutsideWindows(double t, const std::string& label, std::string* error) const;
   void addImpactTerms(int contact);
   // Sets a Hermite group's bubbles so that the group interpolates target(t) (a full joint
   // vector) at interior points of each interval, its breakpoint data already set.
