@@ -51,6 +51,9 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
         track.term = scene.terms[ct.term].id;
         track.link = model.bodies[ct.points.body].name;
         track.pointIndex = static_cast<int>(p);
+        track.start = ct.start;
+        track.end = ct.end;
+        track.freeEnd = ct.freeEnd >= 0;
         if (ct.impact()) {
           track.impact = true;
           track.impactTime = ct.start;

@@ -18,7 +18,7 @@ double secondsSince(Clock::time_point t0) {
 // Forwards Ceres iterations to the user's callback and implements cancel and the time limit.
 class ProgressForwarder : public ceres::IterationCallback {
  public:
-  ProgressForwarder(const SpacetimeProblem& problem, const ProgressCallback& callback,
+  ProgressForwarder(SpacetimeProblem& problem, const ProgressCallback& callback,
                     const std::atomic<bool>* cancel, Clock::time_point start, double maxSeconds)
       : problem_(problem), callback_(callback), cancel_(cancel), start_(start),
         maxSeconds_(maxSeconds) {}
@@ -38,6 +38,10 @@ class ProgressForwarder : public ceres::IterationCallback {
     const double now = secondsSince(start_);
     if (callback_ && s.iteration > 0 && now - lastReport_ >= 0.1) {
       lastReport_ = now;
+      // The callback may sample the iterate's motion (the editor's live view): its times must
+      // follow the iterate's lift-off instants. No residual is being evaluated now, and
+      // residuals do not read the times sync moves.
+      problem_.syncFreeEnds();
       const ProblemMeasures m = measure(problem_);
       IterationReport r;
       r.outer = outer;
@@ -59,7 +63,7 @@ class ProgressForwarder : public ceres::IterationCallback {
   bool cancelled = false, timedOut = false;
 
  private:
-  const SpacetimeProblem& problem_;
+  SpacetimeProblem& problem_;
   const ProgressCallback& callback_;
   const std::atomic<bool>* cancel_;
   Clock::time_point start_;

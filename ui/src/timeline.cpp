@@ -76,6 +76,17 @@ void TimelineBar::paintEvent(QPaintEvent*) {
     p.setBrush(sel ? QColor(120, 170, 90) : QColor(70, 140, 85));
     p.drawRoundedRect(r, 3, 3);
   }
+  // Where the solver let go of a free contact end: a bright tick across the contact's lane (the
+  // bar keeps the scene's end, the search's starting point).
+  if (const auto motion = doc_->motion(); motion && motionFitsScene(*motion, s))
+    for (const CharacterAnimation& a : motion->animation.characters)
+      for (const ContactTrack& track : a.contacts) {
+        const QRectF r = contactBar(track.term);
+        if (!track.freeEnd || track.pointIndex != 0 || r.isNull()) continue;
+        const double x = xAt(track.end);
+        p.setPen(QPen(QColor(250, 250, 120), 2));
+        p.drawLine(QPointF(x, r.top() - 2), QPointF(x, r.bottom() + 2));
+      }
   // Markers.
   for (const TermSpec& t : s.terms) {
     const bool sel = t.id == doc_->selectedTerm();

@@ -17,6 +17,9 @@ struct ContactTrack {
   std::string term;   // the contact term's id
   std::string link;   // body id
   int pointIndex = 0;
+  // The interval as solved: with a free end (freeEnd) `end` is where the solver let go.
+  double start = 0, end = 0;
+  bool freeEnd = false;
   std::vector<Eigen::Vector3d> position, force;  // world, one per frame
   // A contact that touches down with an impact: the instant and the point's world impulse (N s).
   bool impact = false;
