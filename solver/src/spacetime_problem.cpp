@@ -12,7 +12,6 @@
 namespace spacetime {
 namespace {
 
-
 std::string at(const std::string& what, double t) {
   std::ostringstream s;
   s << what << " t=" << t;
@@ -53,6 +52,20 @@ double bubble(int j, double u, int order) {
   double v = 0;
   for (size_t k = c.size(); k-- > 0;) v = v * u + c[k];
   return v;
+}
+
+// A B-spline group's four control points at basis b, with the given weights.
+GroupBasis splineBasis(const DofGroup& g, const BSplineBasis& b, const std::array<double, 4>& w) {
+  GroupBasis gb;
+  const int n = static_cast<int>(g.dofs.size());
+  gb.count = 4;
+  for (int i = 0; i < 4; ++i) {
+    gb.start[i] = g.offset + (b.first + i) * n;
+    gb.size[i] = n;
+    gb.index[i] = 0;
+    gb.weight[i] = w[i];
+  }
+  return gb;
 }
 
 }  // namespace
@@ -96,19 +109,9 @@ std::vector<std::pair<double, double>> SpacetimeProblem::flightPhases(int c) con
 
 GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order,
                                         bool before) const {
-  GroupBasis gb;
   if (!g.hermite) {
     const BSplineBasis b = g.spline.basis(t);
-    const auto& w = b.derivative(order);
-    const int n = static_cast<int>(g.dofs.size());
-    gb.count = 4;
-    for (int i = 0; i < 4; ++i) {
-      gb.start[i] = g.offset + (b.first + i) * n;
-      gb.size[i] = n;
-      gb.index[i] = 0;
-      gb.weight[i] = w[i];
-    }
-    return gb;
+    return splineBasis(g, b, b.derivative(order));
   }
   const int k = hermiteInterval(c, g, t, before);
   return hermiteBasis(g, k, g.breaks[k], g.breaks[k + 1], t, order, 0, 0, 0, nullptr);
@@ -199,12 +202,12 @@ GroupBasis SpacetimeProblem::groupBasisAt(int c, const DofGroup& g, const TimeRe
                                           int order, GroupBasis* slope) const {
   const double t = r.at(T);
   if (!g.hermite) {
-    GroupBasis gb = groupBasis(c, g, t, order);
-    *slope = gb;
     const BSplineBasis b = g.spline.basis(t);
-    for (int i = 0; i < 4; ++i)  // cubic: the fourth derivative vanishes
-      slope->weight[i] = order + 1 <= 3 ? b.derivative(order + 1)[i] * r.rate : 0.0;
-    return gb;
+    std::array<double, 4> next{};  // cubic: the fourth derivative vanishes
+    if (order + 1 <= 3)
+      for (int i = 0; i < 4; ++i) next[i] = b.derivative(order + 1)[i] * r.rate;
+    *slope = splineBasis(g, b, next);
+    return splineBasis(g, b, b.derivative(order));
   }
   const FreeEnd& e = freeEnds_[r.event];
   return hermiteBasis(g, r.interval, e.map(r.intervalStart, r.eventTime, T),
@@ -662,15 +665,15 @@ std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std
 }
 
 bool SpacetimeProblem::addFormulaTerms(std::string* error) {
-  // The inputs of a formula at a sample: built once to size the kernel, then by addResidualAt.
+  // A formula at a sample reads the sample's inputs: q, qd, qdd and the active contacts' forces.
   auto addFormula = [&](int c, double time, const std::string& expression, RowKind kind, double scale,
                         double value, const std::string& label, std::string* why) {
     const SampleInputs si = sampleInputs(c, time);
     auto tape = formulaTape(c, si.active, expression, why);
     if (!tape) return false;
-    InputMap probe;
-    addSampleInputs(probe, si, si.ref.eventTime);
-    addResidualAt(std::make_shared<FormulaKernel>(tape, probe.rows(), time, kind, scale, value, label),
+    int inputs = 3 * characters_[c].dofs;
+    for (int j : si.active) inputs += contacts_[j].blockSize();
+    addResidualAt(std::make_shared<FormulaKernel>(tape, inputs, time, kind, scale, value, label),
                   si.ref.event, [this, si, kind](InputMap& in, double T) {
                     addSampleInputs(in, si, T);
                     if (kind == RowKind::Objective) setQuadratureScale(in, si.ref, T);
