@@ -189,6 +189,7 @@ GroupBasis SpacetimeProblem::hermiteBasis(const DofGroup& g, int k, double a, do
                          power[i] * shape[i] * std::pow(h, power[i] - 1) * dh;
     }
   }
+  applyHeldStances(g, k, &gb, slope);
   return gb;
 }
 
@@ -424,8 +425,10 @@ bool SpacetimeProblem::assemble(std::string* error) {
     contacts_.push_back(cv);
   }
   if (!addFreeEnds(error, &size)) return false;
+  layoutHeldStances();
   x_.assign(size, 0.0);
   initialGuess();
+  settleHeldStances();
   for (const FreeEnd& e : freeEnds_) x_[e.offset] = e.current;
 
   ceres::Problem::Options options;
@@ -537,7 +540,8 @@ bool SpacetimeProblem::assemble(std::string* error) {
     if (!checkOutsideWindows(ct.start, label, error) ||
         !checkOutsideWindows(ct.end, label, error))
       return false;
-    for (double time : ct.times) {
+    // A held stance's anchor rows are the same at every sample: once is enough.
+    for (double time : ct.holdsRoot ? std::vector<double>{ct.times.front()} : ct.times) {
       const TimeRef r = timeRef(ct.character, time);
       const int c = ct.character;
       addResidualAt(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, scene_.groundHeight,
@@ -567,9 +571,23 @@ bool SpacetimeProblem::assemble(std::string* error) {
                       setQuadratureScale(in, r, T);
                     });
     }
+    // A contact that ends before the clip does lets go at its end: its force there is zero.
+    // The joints are C2, so their accelerations do not jump at lift-off; a force still pushing
+    // at that instant would, once removed, accelerate the points into the ground (the root's
+    // acceleration jumps by -M_rr^-1 J^T f). With the clearance or the cone at the next samples
+    // that leaves a feasible set {f >= 0, M^-1 f <= 0} = {0} on which no multiplier exists.
+    const bool releases = letsGo(jj);
     for (double time : ct.times) {
       InputMap in;
       addForceInputs(in, jj, time);
+      if (releases && time == ct.times.back()) {
+        std::vector<std::pair<int, double>> zero;
+        for (int d = 0; d < ct.blockSize(); ++d) zero.emplace_back(d, 0.0);
+        InputMap scaled;
+        addForceInputs(scaled, jj, time, 1.0 / cv.weight);
+        addResidual(std::make_shared<TargetKernel>(ct.blockSize(), zero, at(label + " lift-off", time)), scaled);
+        continue;
+      }
       addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction,
                                                        1.0 / cv.weight, at(label + " cone", time)),
                   in);
@@ -577,11 +595,29 @@ bool SpacetimeProblem::assemble(std::string* error) {
     if (ct.impact()) addImpactTerms(jj);
   }
   if (!addFormulaTerms(error)) return false;
+  fixHeldVelocities();
   for (const FreeEnd& e : freeEnds_) {
     double* T = x_.data() + e.offset;
     if (!problem_->HasParameterBlock(T)) continue;
     problem_->SetParameterLowerBound(T, 0, e.lower);
     problem_->SetParameterUpperBound(T, 0, e.upper);
+  }
+  return true;
+}
+
+bool SpacetimeProblem::letsGo(int j) const {
+  const ContactVariables& ct = contacts_[j];
+  if (ct.end >= scene_.endTime - kTimeTolerance) return false;
+  // Another contact that carries the same points on past the end (a change of friction, say)
+  // keeps them on the ground.
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    const ContactVariables& other = contacts_[k];
+    if (static_cast<int>(k) == j || other.character != ct.character || other.points.body != ct.points.body ||
+        other.start > ct.end + kTimeTolerance || other.end < ct.end + kTimeTolerance)
+      continue;
+    for (const Eigen::Vector3d& p : ct.points.points)
+      for (const Eigen::Vector3d& o : other.points.points)
+        if ((p - o).norm() < 1e-9) return false;
   }
   return true;
 }
@@ -956,6 +992,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
   }
   // Multipliers do not transfer (their rows differ), but the penalty does: it keeps the next
   // solve near the transferred motion instead of first relaxing the constraints.
+  settleHeldStances();
   std::fill(al_.lambda.begin(), al_.lambda.end(), 0.0);
   if (matched > 0) al_.rho = std::max(al_.rho, previous.al_.rho);
   return matched;
@@ -965,6 +1002,7 @@ bool SpacetimeProblem::restore(const SolutionState& s) {
   if (s.variables.size() != x_.size() || s.multipliers.size() != al_.lambda.size()) return false;
   std::copy(s.variables.begin(), s.variables.end(), x_.begin());  // parameter blocks point into x_
   syncFreeEnds();
+  settleHeldStances();
   al_.lambda = s.multipliers;
   if (s.rho > 0) al_.rho = s.rho;
   return true;

@@ -206,6 +206,16 @@ TEST(Luxo, JumpMeetsItsConstraintsAtTheSamples) {
   EXPECT_LT(v.maxRestSpeed, 1e-6);
   EXPECT_LT(v.maxContactSlip, 1e-6);
   EXPECT_LT(v.maxClearanceViolation, 1e-3);
+  // The take-off lets go with zero force: the joints' accelerations are continuous, so a force
+  // still pushing at lift-off would, once removed, accelerate the base into the ground.
+  const ContactVariables& takeoff = problem->contacts()[0];
+  ASSERT_TRUE(problem->letsGo(0));
+  ASSERT_FALSE(problem->letsGo(1));  // the landing lasts to the clip's end
+  for (const Eigen::Vector3d& f : problem->contactForces(0, takeoff.end))
+    EXPECT_LT(f.norm(), 1e-6 * problem->characters()[0].weight);
+  double pushBefore = 0;
+  for (const Eigen::Vector3d& f : problem->contactForces(0, takeoff.end - 0.05)) pushBefore += f.y();
+  EXPECT_GT(pushBefore, 0.1 * problem->characters()[0].weight);
   // The landing is an impact, checked with CRBA (not the RNEA the solver differentiates): the
   // base arrives moving, the ground's impulse alone stops it (M dqd = J^T L on the root rows),
   // pushes and stays in the friction cone, and the base is at rest right after.
@@ -288,7 +298,9 @@ TEST(Luxo, GroundForcesBalanceTheContactPhasesBetweenSamples) {
       GroundForces interpolated(problem->contacts().size());
       for (int k : problem->activeContacts(0, t)) interpolated[k] = problem->contactForces(k, t);
       const double ri = rootResidual(t, interpolated), rr = rootResidual(t, recovered);
-      EXPECT_LE(rr, ri + 1e-9) << "t = " << t;
+      // Within the solver's tolerance (1e-7): where the variables balance the root to a few 1e-9,
+      // the NNLS tie-break towards them can leave as much.
+      EXPECT_LE(rr, ri + 1e-8) << "t = " << t;
       // Both ways: a residual only where no admissible force exists, none where one does.
       const bool exists = exactAdmissibleForceExists(*problem, t, static_cast<int>(j));
       if (rr > 1e-5) EXPECT_FALSE(exists) << "t = " << t;

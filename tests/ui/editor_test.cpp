@@ -325,8 +325,11 @@ class EditorTest : public QObject {
     QVERIFY(openLuxo(w));
     const std::string before = json(*w.document());
     const int commands = w.document()->undoStack()->count();
+    // Stop as soon as the first live iterate arrives: the Luxo solve takes about a second now,
+    // so a fixed wait could see it finish.
+    const auto initial = w.document()->motion();
     w.solve();
-    QTest::qWait(700);
+    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() != initial, 20000);
     QElapsedTimer clock;
     clock.start();
     w.stopSolve();

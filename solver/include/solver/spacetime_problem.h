@@ -9,6 +9,10 @@
 // keyframes, rests, contacts (anchored points, forces in the friction cone), clearances and
 // formula terms at their times.
 //
+// Held stances: a contact whose points fix the floating root (held_stances.cpp) holds the root
+// still by construction - one pose, zero velocity - instead of by anchor rows at the samples.
+// Lift-off: a contact that ends before the clip does lets go with zero force (letsGo).
+//
 // Free contact ends (the scene's `freeEnd`): the lift-off instant T of such a contact is one
 // more variable. The root's breakpoint at the contact's end becomes T, inside a window
 // [left, right] of root breakpoints around it (the scene's `freeEndWindow` either side); the
@@ -64,6 +68,12 @@ struct DofGroup {
                    // positions then velocities at offset + k * 2n (n = dofs.size())
   int bubbleOffset = 0;  // Hermite: interval k's bubbles at bubbleOffset + k * bubbles * n,
                          // bubble j of dof d at + j * n + d
+  // Hermite: held stances (see SpacetimeProblem::layoutHeldStances). poseOf[k] is the breakpoint
+  // whose positions hold breakpoint k's pose while a contact holds the root still (-1: free);
+  // heldInterval[k] says interval k lies inside such a stance (the root is constant there).
+  std::vector<int> poseOf;
+  std::vector<char> heldInterval;
+  bool heldAt(int k) const { return !poseOf.empty() && poseOf[k] >= 0; }
   int blockSize() const { return (hermite ? 2 : 1) * static_cast<int>(dofs.size()); }
   int blockCount() const {
     return hermite ? static_cast<int>(breaks.size()) : spline.controlPointCount();
@@ -138,6 +148,9 @@ struct ContactVariables {
   int impulseOffset = -1;  // -1: no impact
   bool impact() const { return impulseOffset >= 0; }
   int freeEnd = -1;  // index into SpacetimeProblem::freeEnds() if the end is a variable
+  // The points fix the floating root's pose (its body is the root body and they are not
+  // collinear): the root is held constant over the contact (see layoutHeldStances).
+  bool holdsRoot = false;
   int blockSize() const { return forceDims * static_cast<int>(points.points.size()); }
   int sampleIndex(double t) const;  // -1 if t is not one of `times`
   // The sample at or before t and the weight of the next one (forces are linear between
@@ -178,6 +191,9 @@ class SpacetimeProblem {
   Eigen::VectorXd jointStateBefore(int character, double t, int order) const;
   // World force of each point of a contact at time t (zero outside its interval).
   std::vector<Eigen::Vector3d> contactForces(int contact, double t) const;
+  // Whether contact j's points leave the ground at its end: it ends before the clip does and no
+  // other contact carries any of its points on. Their force is then zero at that instant.
+  bool letsGo(int j) const;
   // The contacts of the same character that touch down with an impact at the same instant as
   // contact j (j included, in contact order): they share one velocity jump.
   std::vector<int> simultaneousImpacts(int j) const;
@@ -244,6 +260,21 @@ class SpacetimeProblem {
                           int order, GroupBasis* slope) const;
   // The character's root (Hermite) group, or null.
   const DofGroup* rootGroup(int character) const;
+  // Held stances (held_stances.cpp). A contact whose points fix the floating root's pose holds
+  // the root still by construction: over the contact the root's Hermite breakpoints share one
+  // pose (the first one's positions), their velocities are zero and the intervals' bubbles
+  // vanish, so the root's acceleration is exactly zero between samples too and one anchor row
+  // set per contact ties the pose to the ground. Otherwise anchors imposed only at samples on a
+  // root polynomial of degree s + 1 let a violation of ~1e-5 m buy a large root acceleration at
+  // a sample, and the augmented Lagrangian stalls on the anchor before lift-off.
+  void layoutHeldStances();
+  // Moves held breakpoints' data to their stance's pose (velocities and bubbles zero), so the
+  // variables read the same through any path.
+  void settleHeldStances();
+  // The velocities of each stance's pose block stay constant (zero) in the Ceres problem.
+  void fixHeldVelocities();
+  // Redirects a Hermite basis on interval k to the stances' poses.
+  void applyHeldStances(const DofGroup& g, int k, GroupBasis* gb, GroupBasis* slope) const;
   // Lays out the free ends' variables from *size on (after the contacts).
   bool addFreeEnds(std::string* error, int* size);
   // An error if a term's instant t lies strictly inside a free end's window (other than at the

@@ -1,0 +1,106 @@
+// Held stances (solver/src/held_stances.cpp): a contact whose points fix the floating root holds
+// the root still by construction. Checked on arbitrary (random) variables, not on a solve, so
+// the property is the transcription's and not the optimum's: over every held contact the root's
+// pose is one value and its velocity and acceleration are exactly zero at every instant, the
+// first flight interval starts from that pose at rest, the flight itself is free, and contacts
+// that cannot fix the root (one point, a body other than the root) leave it free.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "../shipped_scene.h"
+#include "split_landing.h"
+#include "solver/spacetime_problem.h"
+
+namespace spacetime {
+namespace {
+
+std::unique_ptr<SpacetimeProblem> randomised(const Scene& scene) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  EXPECT_TRUE(problem) << error;
+  if (!problem) return problem;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  for (double& x : problem->variables()) x += noise(rng);
+  return problem;
+}
+
+// The root coordinates' part of a joint vector.
+Eigen::VectorXd root(const SpacetimeProblem& p, const Eigen::VectorXd& q) {
+  const std::vector<int>& dofs = p.characters()[0].groups[1].dofs;
+  Eigen::VectorXd r(dofs.size());
+  for (size_t k = 0; k < dofs.size(); ++k) r[k] = q[dofs[k]];
+  return r;
+}
+
+// Over each contact that holds the root: one pose, zero velocity and acceleration, on a grid of
+// 200 instants per contact (the touch-down instant on its contact side). Returns how many
+// contacts were checked.
+int expectStill(const SpacetimeProblem& p) {
+  int held = 0;
+  for (const ContactVariables& ct : p.contacts()) {
+    if (!ct.holdsRoot) continue;
+    ++held;
+    const Eigen::VectorXd pose = root(p, p.jointState(0, ct.start, 0));
+    for (int i = 0; i <= 200; ++i) {
+      const double t = ct.start + (ct.end - ct.start) * i / 200.0;
+      EXPECT_LT((root(p, p.jointState(0, t, 0)) - pose).cwiseAbs().maxCoeff(), 1e-12) << "t=" << t;
+      EXPECT_LT(root(p, p.jointState(0, t, 1)).cwiseAbs().maxCoeff(), 1e-12) << "t=" << t;
+      EXPECT_LT(root(p, p.jointState(0, t, 2)).cwiseAbs().maxCoeff(), 1e-9) << "t=" << t;
+    }
+  }
+  return held;
+}
+
+TEST(HeldStance, TheLampsBaseStandsStillOverEachContactAndMovesInFlight) {
+  for (const char* name : {"luxo_jump.json", "luxo_3d.json"}) {
+    SCOPED_TRACE(name);
+    for (int samples : {2, 4}) {
+      Scene scene = testing::shippedScene(name);
+      scene.transcription.samplesPerSegment = samples;
+      const auto p = randomised(scene);
+      ASSERT_TRUE(p);
+      EXPECT_EQ(expectStill(*p), 2);  // take-off and landing
+      const ContactVariables& takeoff = p->contacts()[0];
+      const ContactVariables& landing = p->contacts()[1];
+      // The flight starts from the held pose at rest and is free: it moves, and it arrives at the
+      // landing with a velocity the impact takes away.
+      const double T = takeoff.end, mid = 0.5 * (T + landing.start);
+      const double after = T + 1e-7;  // on the flight's side of the lift-off breakpoint
+      const double accel = root(*p, p->jointState(0, after, 2)).norm();
+      EXPECT_LT((root(*p, p->jointState(0, after, 0)) - root(*p, p->jointState(0, T, 0))).norm(), 1e-9);
+      EXPECT_LT(root(*p, p->jointState(0, after, 1)).norm(), 2e-7 * (1 + accel));
+      EXPECT_GT(accel, 1e-3);
+      EXPECT_GT(root(*p, p->jointState(0, mid, 1)).norm(), 1e-3);
+      EXPECT_GT(root(*p, p->jointStateBefore(0, landing.start, 1)).norm(), 1e-3);
+      EXPECT_LT(root(*p, p->jointState(0, landing.start, 1)).norm(), 1e-12);
+    }
+  }
+}
+
+TEST(HeldStance, ContactsThatCannotFixTheRootLeaveItFree) {
+  // One point per contact term (heel and toe landing separately): each fixes two of the three
+  // planar root coordinates, so neither holds the root, and the landing's root moves.
+  {
+    const auto p = randomised(testing::withSplitLanding(testing::shippedScene("luxo_jump.json")));
+    ASSERT_TRUE(p);
+    EXPECT_EQ(expectStill(*p), 1);  // the take-off only
+    const ContactVariables& heel = p->contacts()[1];
+    ASSERT_FALSE(heel.holdsRoot);
+    EXPECT_GT(root(*p, p->jointState(0, 0.5 * (heel.start + heel.end), 1)).norm(), 1e-3);
+  }
+  // Two points on a body other than the root: the joints move that body, so the root is free.
+  {
+    Scene scene = testing::shippedScene("luxo_jump.json");
+    for (TermSpec& t : scene.terms)
+      if (t.id == "landing") t.body = "head";
+    const auto p = randomised(scene);
+    ASSERT_TRUE(p);
+    EXPECT_EQ(expectStill(*p), 1);
+    EXPECT_FALSE(p->contacts()[1].holdsRoot);
+  }
+}
+
+}  // namespace
+}  // namespace spacetime
