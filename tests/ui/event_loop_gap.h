@@ -18,7 +18,9 @@ enum class WindowMode { Hidden, Shown, ShownPlaying };
 
 struct EventLoopGap {
   qint64 worstMs = -1;
-  int iterates = 0;  // solver iterates that reached the interface
+  qint64 worstEndedAtMs = -1;  // when the longest wait ended, from the start of the solve
+  int iterates = 0;            // solver iterates that reached the interface
+  int iteratesBeforeWorst = 0;
 };
 
 // Solves the window's scene from its current state and watches the event loop for the first
@@ -35,7 +37,14 @@ inline EventLoopGap eventLoopGapDuringSolve(MainWindow& w, WindowMode mode, int 
   qint64 worst = 0;
   QTimer timer;
   timer.setInterval(5);
-  QObject::connect(&timer, &QTimer::timeout, [&] { worst = std::max(worst, sinceTick.restart()); });
+  QObject::connect(&timer, &QTimer::timeout, [&] {
+    const qint64 waited = sinceTick.restart();
+    if (waited > worst) {
+      worst = waited;
+      gap.worstEndedAtMs = clock.elapsed();
+      gap.iteratesBeforeWorst = gap.iterates;
+    }
+  });
   timer.start();
   while (clock.elapsed() < milliseconds && w.solverJob()->isRunning()) QTest::qWait(20);
   timer.stop();
