@@ -53,11 +53,19 @@ bool pointsFixRoot(const Model<double>& model, const DofGroup& root, const Conta
 
 }  // namespace
 
+bool SpacetimeProblem::fixesRoot(int character, const ContactPoints& points) const {
+  const DofGroup* g = rootGroup(character);
+  return g && pointsFixRoot(*characters_[character].model, *g, points);
+}
+
+bool SpacetimeProblem::physicsAt(int character, const Sample& s) const {
+  if (!s.stance) return true;
+  return std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
+    return ct.holdsRoot && ct.character == character && ct.sampleIndex(s.time) >= 0;
+  });
+}
+
 void SpacetimeProblem::layoutHeldStances() {
-  for (ContactVariables& ct : contacts_) {
-    const DofGroup* g = rootGroup(ct.character);
-    ct.holdsRoot = g && pointsFixRoot(*characters_[ct.character].model, *g, ct.points);
-  }
   for (size_t c = 0; c < characters_.size(); ++c)
     for (DofGroup& g : characters_[c].groups) {
       if (!g.hermite) continue;

@@ -24,11 +24,13 @@ bool touchesDownWithImpact(const TermSpec& t, const Scene& scene) {
          t.start > scene.startTime + kTimeTolerance && t.start < scene.endTime - kTimeTolerance;
 }
 
-// Times where an interval term is imposed: the samples inside it and its two ends.
-std::vector<double> intervalTimes(const Transcription& tr, double a, double b) {
+// Times where an interval term is imposed: the samples inside it and its two ends; stance
+// samples (Sample::stance) only when asked for.
+std::vector<double> intervalTimes(const Transcription& tr, double a, double b, bool stance = false) {
   std::vector<double> times = {a, b};
   for (const Sample& s : tr.samplesIn(a, b))
-    if (std::abs(s.time - a) > 1e-9 && std::abs(s.time - b) > 1e-9) times.push_back(s.time);
+    if (std::abs(s.time - a) > 1e-9 && std::abs(s.time - b) > 1e-9 && (stance || !s.stance))
+      times.push_back(s.time);
   std::sort(times.begin(), times.end());
   return times;
 }
@@ -413,7 +415,8 @@ bool SpacetimeProblem::assemble(std::string* error) {
     cv.end = t.end;
     cv.friction = t.friction;
     cv.forceDims = ch.forceDims;
-    cv.times = intervalTimes(transcription_, t.start, t.end);
+    cv.holdsRoot = fixesRoot(cv.character, cv.points);
+    cv.times = intervalTimes(transcription_, t.start, t.end, cv.holdsRoot);
     cv.forceOffset = size;
     size += cv.blockSize() * static_cast<int>(cv.times.size());
     cv.anchorOffset = size;
@@ -443,6 +446,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const bool anyLimits = std::any_of(cv.model->bodies.begin(), cv.model->bodies.end(),
                                        [](const Body<double>& b) { return b.hasPositionLimits; });
     for (const Sample& s : transcription_.samples) {
+      if (!physicsAt(ci, s)) continue;
       DynamicsKernel::Options o;
       o.effortWeight = obj.effort * s.weight;
       o.powerWeight = obj.power * s.weight;

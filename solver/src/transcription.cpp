@@ -53,11 +53,18 @@ Transcription Transcription::fromScene(const Scene& scene) {
       extra.push_back(t.start);
       extra.push_back(t.end);
     }
-  for (double e : extra) {
-    const bool present = std::any_of(tr.samples.begin(), tr.samples.end(),
-                                     [&](const Sample& s) { return std::abs(s.time - e) < 1e-9; });
-    if (!present) tr.samples.push_back({e, 0.0});
-  }
+  auto present = [&](double t) {
+    return std::any_of(tr.samples.begin(), tr.samples.end(),
+                       [&](const Sample& s) { return std::abs(s.time - t) < 1e-9; });
+  };
+  for (double e : extra)
+    if (!present(e)) tr.samples.push_back({e, 0.0});
+  for (const TermSpec& t : scene.terms)
+    if (t.enabled && t.kind == TermKind::Contact)
+      for (int k = 1; k < tr.motion.segmentCount(); ++k) {
+        const double knot = t0 + k * tr.motion.knotSpacing();
+        if (knot > t.start + 1e-9 && knot < t.end - 1e-9 && !present(knot)) tr.samples.push_back({knot, 0.0, true});
+      }
   std::sort(tr.samples.begin(), tr.samples.end(),
             [](const Sample& a, const Sample& b) { return a.time < b.time; });
   return tr;
@@ -71,7 +78,8 @@ std::vector<Sample> Transcription::samplesIn(double t0, double t1) const {
 }
 
 std::vector<double> Transcription::denseGrid(int factor) const {
-  const int n = static_cast<int>(samples.size()) * factor;
+  const int n = static_cast<int>(std::count_if(samples.begin(), samples.end(),
+                                               [](const Sample& s) { return !s.stance; })) * factor;
   std::vector<double> grid(n + 1);
   for (int i = 0; i <= n; ++i)
     grid[i] = motion.start() + (motion.end() - motion.start()) * i / n;

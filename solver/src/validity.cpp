@@ -135,7 +135,8 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const int ci = static_cast<int>(c);
     for (const Sample& s : tr.samples)
-      r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples,
+      if (problem.physicsAt(ci, s))
+        r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples,
                                                 unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time)));
     for (double t : dense) {
       const double v = unactuatedResidual(problem, ci, t, groundAt(ci, t));

@@ -34,6 +34,25 @@ Eigen::VectorXd root(const SpacetimeProblem& p, const Eigen::VectorXd& q) {
   return r;
 }
 
+// Stance samples (the knots inside a contact): physics there for a character whose root the
+// contact holds, and the contact's force is a variable there; nowhere else. Returns how many.
+int stanceSamples(const SpacetimeProblem& p) {
+  int count = 0;
+  for (const Sample& s : p.transcription().samples) {
+    if (!s.stance) continue;
+    EXPECT_EQ(s.weight, 0.0);
+    bool held = false;
+    for (const ContactVariables& ct : p.contacts()) {
+      const bool inside = s.time > ct.start && s.time < ct.end;
+      EXPECT_EQ(ct.sampleIndex(s.time) >= 0, inside && ct.holdsRoot) << "t=" << s.time;
+      held = held || (inside && ct.holdsRoot);
+    }
+    EXPECT_EQ(p.physicsAt(0, s), held) << "t=" << s.time;
+    count += held;
+  }
+  return count;
+}
+
 // Over each contact that holds the root: one pose, zero velocity and acceleration, on a grid of
 // 200 instants per contact (the touch-down instant on its contact side). Returns how many
 // contacts were checked.
@@ -62,6 +81,8 @@ TEST(HeldStance, TheLampsBaseStandsStillOverEachContactAndMovesInFlight) {
       const auto p = randomised(scene);
       ASSERT_TRUE(p);
       EXPECT_EQ(expectStill(*p), 2);  // take-off and landing
+      // 20 knots per second: 0.05-0.35 s inside the take-off, 0.85-1.15 s inside the landing.
+      EXPECT_EQ(stanceSamples(*p), 14);
       const ContactVariables& takeoff = p->contacts()[0];
       const ContactVariables& landing = p->contacts()[1];
       // The flight starts from the held pose at rest and is free: it moves, and it arrives at the
@@ -88,6 +109,7 @@ TEST(HeldStance, ContactsThatCannotFixTheRootLeaveItFree) {
     EXPECT_EQ(expectStill(*p), 1);  // the take-off only
     const ContactVariables& heel = p->contacts()[1];
     ASSERT_FALSE(heel.holdsRoot);
+    EXPECT_EQ(stanceSamples(*p), 7);  // the take-off's only
     EXPECT_GT(root(*p, p->jointState(0, 0.5 * (heel.start + heel.end), 1)).norm(), 1e-3);
   }
   // Two points on a body other than the root: the joints move that body, so the root is free.

@@ -194,6 +194,9 @@ class SpacetimeProblem {
   // Whether contact j's points leave the ground at its end: it ends before the clip does and no
   // other contact carries any of its points on. Their force is then zero at that instant.
   bool letsGo(int j) const;
+  // Whether physics is imposed on character c at sample s: everywhere but at a stance sample
+  // (Sample::stance) outside the contacts that hold c's root.
+  bool physicsAt(int c, const Sample& s) const;
   // The contacts of the same character that touch down with an impact at the same instant as
   // contact j (j included, in contact order): they share one velocity jump.
   std::vector<int> simultaneousImpacts(int j) const;
@@ -268,6 +271,8 @@ class SpacetimeProblem {
   // root polynomial of degree s + 1 let a violation of ~1e-5 m buy a large root acceleration at
   // a sample, and the augmented Lagrangian stalls on the anchor before lift-off.
   void layoutHeldStances();
+  // Whether contact points on this character fix its floating root (held_stances.cpp).
+  bool fixesRoot(int character, const ContactPoints& points) const;
   // Moves held breakpoints' data to their stance's pose (velocities and bubbles zero), so the
   // variables read the same through any path.
   void settleHeldStances();

@@ -6,7 +6,8 @@
 // inside every interval between breakpoints (two by default: the collocation of de Boor &
 // Swartz 1973 for the root's C1 piecewise cubics, and exact quadrature of the particle's
 // piecewise-quadratic integrands), plus the clip's ends and every contact edge with zero
-// quadrature weight: physics must hold at the instants where contact begins and ends.
+// quadrature weight: physics must hold at the instants where contact begins and ends; plus
+// "stance" samples at the knots inside each contact (zero weight, see Sample::stance).
 #pragma once
 
 #include <vector>
@@ -19,6 +20,11 @@ namespace spacetime {
 struct Sample {
   double time = 0;
   double weight = 0;  // quadrature weight (0 for the extra boundary samples)
+  // A knot inside a contact interval (zero weight): physics and the friction cone are imposed
+  // there only for a character whose root that contact holds still (see
+  // SpacetimeProblem::physicsAt). The joints' jerk jumps at knots, so the ground force a stance
+  // needs has a kink there, which the Gauss points on either side do not see.
+  bool stance = false;
 };
 
 struct Transcription {
@@ -29,7 +35,8 @@ struct Transcription {
   static Transcription fromScene(const Scene& scene);
   // Samples whose time lies in [t0, t1] (inclusive, with a small tolerance).
   std::vector<Sample> samplesIn(double t0, double t1) const;
-  // A uniform grid with `factor` times as many points as there are samples.
+  // A uniform grid with `factor` times as many points as there are samples (stance samples
+  // not counted).
   std::vector<double> denseGrid(int factor) const;
 };
 
