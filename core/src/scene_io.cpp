@@ -380,8 +380,6 @@ TermSpec readTerm(const Reader& r, const json& t, const std::string& path, const
       if (t.contains("freeEnd")) ts.freeEnd = r.boolean(t["freeEnd"], Reader::join(path, "freeEnd"));
       if (t.contains("freeEndWindow")) {
         ts.freeEndWindow = r.nonNegative(t["freeEndWindow"], Reader::join(path, "freeEndWindow"));
-        if (!(ts.freeEndWindow > 0))
-          r.badValue(Reader::join(path, "freeEndWindow"), t["freeEndWindow"], "a positive duration in seconds");
       }
       break;
     }

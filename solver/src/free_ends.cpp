@@ -63,9 +63,13 @@ bool SpacetimeProblem::addFreeEnds(std::string* error, int* size) {
       *error = label + " needs a contact that ends before the clip does";
       return false;
     }
-    // The window: the root breakpoints at least freeEndWindow before and after the end.
+    // The window: the root breakpoints at least freeEndWindow before and after the end - by
+    // default the neighbouring ones, so only the lift-off itself moves. Breakpoints inside a
+    // wider window move with T, away from the joints' knots where the joints' jerk jumps, and
+    // the root then cannot follow that kink (luxo_jump at s = 6: dense-grid residual 0.14 x
+    // weight with a 0.1 s window, 0.001 with the default).
     const auto& tb = transcription_.breakpoints;
-    const double w = std::max(spec.freeEndWindow, kTimeTolerance);
+    const double w = std::max(spec.freeEndWindow, 2 * kTimeTolerance);
     FreeEnd e;
     e.contact = static_cast<int>(j);
     e.character = ct.character;

@@ -92,11 +92,12 @@ struct TermSpec {
   // velocity jump of the root, with a ground impulse) rather than already at rest
   bool impact = true;
   // contact: the solver chooses when the points leave the ground - `end` is only where the
-  // search starts, within about freeEndWindow seconds either side of it (a lift-off instant as
-  // a variable; times of other terms equal to `end` move with it, and no other term's time may
-  // lie inside that window)
+  // search starts (a lift-off instant as a variable; times of other terms equal to `end` move
+  // with it, and no other term's time may lie inside its window). The window: the root
+  // breakpoints next to `end` (0, the default: only the lift-off moves, between two knots), or
+  // those at least freeEndWindow seconds either side (the breakpoints inside then move too)
   bool freeEnd = false;
-  double freeEndWindow = 0.1;
+  double freeEndWindow = 0;
   double height = 0;                                   // clearance: minimum world y
   bool box = false;  // clearance: stay outside the axis-aligned box [boxMin, boxMax] instead
   Eigen::Vector3d boxMin = Eigen::Vector3d::Zero(), boxMax = Eigen::Vector3d::Zero();
