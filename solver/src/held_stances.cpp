@@ -74,11 +74,10 @@ void SpacetimeProblem::layoutHeldStances() {
       g.heldInterval.assign(std::max(0, breaks - 1), 0);
       for (const ContactVariables& ct : contacts_) {
         if (!ct.holdsRoot || ct.character != static_cast<int>(c)) continue;
+        // The first of an impact's repeated breakpoints is the state before touch-down.
         auto inside = [&](int k) {
-          if (g.breaks[k] < ct.start - kTimeTolerance || g.breaks[k] > ct.end + kTimeTolerance) return false;
-          // The first of an impact's repeated breakpoints is the state before touch-down.
-          const bool before = k + 1 < breaks && std::abs(g.breaks[k + 1] - g.breaks[k]) < kTimeTolerance;
-          return !before;
+          return g.breaks[k] >= ct.start - kTimeTolerance && g.breaks[k] <= ct.end + kTimeTolerance &&
+                 !g.beforeImpact(k);
         };
         for (int k = 0; k < breaks; ++k) held[k] |= inside(k);
         for (int k = 0; k + 1 < breaks; ++k)
@@ -93,33 +92,27 @@ void SpacetimeProblem::layoutHeldStances() {
 void SpacetimeProblem::applyHeldStances(const DofGroup& g, int k, GroupBasis* gb, GroupBasis* slope) const {
   if (g.poseOf.empty()) return;
   const int size = g.blockSize();
-  // Entries 0-3 are the Hermite data of breakpoints k and k + 1 (position, velocity each).
-  for (int i = 0; i < 4; ++i) {
-    const int end = i < 2 ? k : k + 1;
-    if (!g.heldAt(end)) continue;
-    gb->start[i] = g.offset + g.poseOf[end] * size;
-    if (i % 2 == 1) gb->weight[i] = 0;  // a held breakpoint is at rest
-    if (slope) {
-      slope->start[i] = gb->start[i];
-      if (i % 2 == 1) slope->weight[i] = 0;
+  // The same redirection for the basis and its slope in T.
+  auto redirect = [&](GroupBasis* b) {
+    // Entries 0-3 are the Hermite data of breakpoints k and k + 1 (position, velocity each).
+    for (int i = 0; i < 4; ++i) {
+      const int end = i < 2 ? k : k + 1;
+      if (!g.heldAt(end)) continue;
+      b->start[i] = g.offset + g.poseOf[end] * size;
+      if (i % 2 == 1) b->weight[i] = 0;  // a held breakpoint is at rest
     }
-  }
-  if (!g.heldInterval[k]) return;
-  // A held interval's bubbles vanish: point their entries at the pose block with zero weight, so
-  // the unused bubble block never enters the problem.
-  const int pose = g.offset + g.poseOf[k] * size;
-  for (int i = 4; i < gb->count; ++i) {
-    gb->start[i] = pose;
-    gb->size[i] = size;
-    gb->index[i] = 0;
-    gb->weight[i] = 0;
-    if (slope) {
-      slope->start[i] = pose;
-      slope->size[i] = size;
-      slope->index[i] = 0;
-      slope->weight[i] = 0;
+    if (!g.heldInterval[k]) return;
+    // A held interval's bubbles vanish: point their entries at the pose block with zero weight,
+    // so the unused bubble block never enters the problem.
+    for (int i = 4; i < b->count; ++i) {
+      b->start[i] = g.offset + g.poseOf[k] * size;
+      b->size[i] = size;
+      b->index[i] = 0;
+      b->weight[i] = 0;
     }
-  }
+  };
+  redirect(gb);
+  if (slope) redirect(slope);
 }
 
 void SpacetimeProblem::settleHeldStances() {

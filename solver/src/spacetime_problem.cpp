@@ -583,15 +583,14 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const bool releases = letsGo(jj);
     for (double time : ct.times) {
       InputMap in;
-      addForceInputs(in, jj, time);
       if (releases && time == ct.times.back()) {
         std::vector<std::pair<int, double>> zero;
         for (int d = 0; d < ct.blockSize(); ++d) zero.emplace_back(d, 0.0);
-        InputMap scaled;
-        addForceInputs(scaled, jj, time, 1.0 / cv.weight);
-        addResidual(std::make_shared<TargetKernel>(ct.blockSize(), zero, at(label + " lift-off", time)), scaled);
+        addForceInputs(in, jj, time, 1.0 / cv.weight);
+        addResidual(std::make_shared<TargetKernel>(ct.blockSize(), zero, at(label + " lift-off", time)), in);
         continue;
       }
+      addForceInputs(in, jj, time);
       addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction,
                                                        1.0 / cv.weight, at(label + " cone", time)),
                   in);
@@ -964,7 +963,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
       }
       for (size_t k = 0; k < g.breaks.size(); ++k) {
         // The first of a repeated breakpoint is the state before an impact.
-        const bool before = k + 1 < g.breaks.size() && std::abs(g.breaks[k + 1] - g.breaks[k]) < kTimeTolerance;
+        const bool before = g.beforeImpact(k);
         const double t = clampTime(g.breaks[k]);
         const Eigen::VectorXd q = before ? previous.jointStateBefore(pc, t, 0) : previous.jointState(pc, t, 0);
         const Eigen::VectorXd v = before ? previous.jointStateBefore(pc, t, 1) : previous.jointState(pc, t, 1);

@@ -28,6 +28,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <memory>
@@ -74,6 +75,10 @@ struct DofGroup {
   std::vector<int> poseOf;
   std::vector<char> heldInterval;
   bool heldAt(int k) const { return !poseOf.empty() && poseOf[k] >= 0; }
+  // Hermite: breakpoint k is the first of an impact's repeated pair (the state before it).
+  bool beforeImpact(size_t k) const {
+    return k + 1 < breaks.size() && std::abs(breaks[k + 1] - breaks[k]) < kTimeTolerance;
+  }
   int blockSize() const { return (hermite ? 2 : 1) * static_cast<int>(dofs.size()); }
   int blockCount() const {
     return hermite ? static_cast<int>(breaks.size()) : spline.controlPointCount();
