@@ -3,6 +3,8 @@
 
 #include <ceres/ceres.h>
 
+#include "solver/newton_polish.h"
+
 #include <chrono>
 #include <cmath>
 
@@ -97,6 +99,8 @@ std::string SolverOptions::validate() const {
   if (!(maxSeconds > 0)) return "maxSeconds must be > 0";
   if (threads < 1) return "threads must be at least 1";
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
+  if (!(polishBelow > 0)) return "polishBelow must be > 0";
+  if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
   return "";
 }
 
@@ -189,6 +193,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   SolutionState lastGood = problem.state();
   ProblemMeasures m = measure(problem);
   double previousViolation = m.maxViolation;
+  bool polishTried = false;
   auto holdFreeEnds = [&](bool hold) {
     for (const FreeEnd& e : problem.freeEnds()) {
       double* T = problem.variables().data() + e.offset;
@@ -242,6 +247,25 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       summary.converged = true;
       summary.reason = "constraints within tolerance and the augmented Lagrangian stationary";
       break;
+    }
+    if (options.newtonPolish && !polishTried && !freeEndsHeld && m.maxViolation <= options.polishBelow) {
+      polishTried = true;
+      PolishOptions po;
+      po.tolerance = options.tolerance;
+      po.maxIterations = options.maxPolishIterations;
+      po.threads = options.threads;
+      const PolishResult polish = polishNewton(problem, po, cancel);
+      summary.newtonSteps = polish.iterations;
+      summary.jacobianSeconds += polish.jacobianSeconds;
+      if (polish.converged) {
+        m = measure(problem);
+        summary.status = SolveStatus::Converged;
+        summary.converged = true;
+        summary.polished = true;
+        summary.reason = "constraints within tolerance and the KKT conditions met after " +
+                         std::to_string(polish.iterations) + " Newton steps with the exact Hessian";
+        break;
+      }
     }
     // First-order multiplier update (Nocedal & Wright eq. 17.39; 17.67 for inequalities).
     for (size_t k = 0; k < rows.size(); ++k) {

@@ -2,6 +2,7 @@
 // the other Jet-heavy code out of it and it out of headers so builds stay fast.
 #include "solver/kernels.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "dynamics/algorithms.h"
@@ -17,6 +18,34 @@ void seedChunk(const double* z, int n, int start, int end, JetChunk* zj) {
   }
 }
 }  // namespace
+
+void Kernel::weightedHessian(const double* z, const double* w, double* hessian) const {
+  const int n = inputs_, m = rowCount(), k = nonlinearInputs();
+  std::fill(hessian, hessian + n * n, 0.0);
+  if (k == 0) return;
+  std::vector<double> rows(m), J0(m * n), J1(m * n), zp(z, z + n);
+  evaluateWithJacobian(z, rows.data(), J0.data());
+  for (int i = 0; i < k; ++i) {
+    const double h = 1e-7 * (1 + std::abs(z[i]));
+    zp[i] = z[i] + h;
+    evaluateWithJacobian(zp.data(), rows.data(), J1.data());
+    zp[i] = z[i];
+    // Column i: d/dz_i of the gradient sum_r w_r d rows_r / dz_j. Within the nonlinear block
+    // both (i, j) and (j, i) are measured; their mean is the symmetric part.
+    for (int j = 0; j < n; ++j) {
+      double d = 0;
+      for (int r = 0; r < m; ++r) d += w[r] * (J1[r * n + j] - J0[r * n + j]);
+      d /= h;
+      if (j < k) {
+        hessian[i * n + j] += 0.5 * d;
+        hessian[j * n + i] += 0.5 * d;
+      } else {
+        hessian[i * n + j] = d;
+        hessian[j * n + i] = d;
+      }
+    }
+  }
+}
 
 void Kernel::evaluateWithJacobian(const double* z, double* rows, double* jacobian) const {
   const int n = inputs_, m = rowCount();

@@ -38,6 +38,8 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["objective"] = s.objective;
   j["iterations"] = s.iterations;
   j["outer_iterations"] = s.outerIterations;
+  j["newton_steps"] = s.newtonSteps;
+  j["polished"] = s.polished;
   j["solve_seconds"] = s.solveSeconds;
   j["jacobian_seconds"] = s.jacobianSeconds;
   j["linear_solver_seconds"] = s.linearSolverSeconds;

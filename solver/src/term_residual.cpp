@@ -97,6 +97,14 @@ std::vector<double> TermResidual::rawRowsNow() const {
   return rows;
 }
 
+Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w) const {
+  const Eigen::VectorXd z = B_ * stacked(blocks_.data());
+  const int nz = kernel_->inputSize();
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Hz(nz, nz);
+  kernel_->weightedHessian(z.data(), w, Hz.data());
+  return B_.transpose() * Hz * B_;
+}
+
 bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
                             double** jacobians) const {
   const Map mp = map(parameters);
@@ -126,6 +134,7 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
   Eigen::VectorXd rowScale = Eigen::VectorXd::Ones(m);
   for (int r = 0; r < m; ++r) {
     if (!std::isfinite(residuals[r])) return false;  // Ceres rejects the step
+    if (al_->raw) continue;
     if (al_->projectOnly) {
       const bool zero = kinds[r] == RowKind::Objective ||
                         (kinds[r] == RowKind::Inequality && residuals[r] <= 0);

@@ -38,6 +38,13 @@ class Kernel {
   // Rows and their row-major Jacobian (rowCount x inputSize) with respect to z. The default
   // seeds Jets on every input; kernels with linear structure override it.
   virtual void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const;
+  // How many leading inputs the rows are nonlinear in; the rest enter linearly (the forces,
+  // anchors and accelerations of most kernels), so second derivatives among them vanish.
+  virtual int nonlinearInputs() const { return inputs_; }
+  // The Hessian of sum_r w[r] rows_r(z) (inputSize x inputSize, row-major, symmetric): forward
+  // differences of the exact Jacobian in the nonlinear inputs, step 1e-7 (1 + |z_i|). The
+  // Newton polish's Lagrangian Hessian (newton_polish.h) is built from these.
+  void weightedHessian(const double* z, const double* w, double* hessian) const;
 
  protected:
   int inputs_ = 0;
@@ -71,6 +78,7 @@ class DynamicsKernel : public Kernel {
   // seeded on (q, qd) only; d tau / d qdd is the CRBA mass matrix and d tau / d f_k the RNEA of
   // a unit force with no motion and no gravity.
   void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const override;
+  int nonlinearInputs() const override { return 2 * model_->dofCount(); }  // q, qd
 
  private:
   template <class T>
@@ -92,6 +100,7 @@ class WeightedValueKernel : public Kernel {
  public:
   WeightedValueKernel(int size, double weight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 0; }  // linear rows
 
  private:
   double sqrtWeight_;
@@ -102,6 +111,7 @@ class TargetKernel : public Kernel {
  public:
   TargetKernel(int size, std::vector<std::pair<int, double>> targets, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 0; }  // linear rows
 
  private:
   std::vector<std::pair<int, double>> targets_;
@@ -139,6 +149,7 @@ class ContactAnchorKernel : public Kernel {
   ContactAnchorKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
                       double groundHeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return model_->dofCount(); }  // q, not anchors
 
  private:
   std::shared_ptr<const Model<double>> model_;
@@ -155,6 +166,7 @@ class FrictionConeKernel : public Kernel {
  public:
   FrictionConeKernel(int points, int forceDims, double mu, double weightScale, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 0; }  // linear rows
 
  private:
   int points_, dims_;
@@ -176,6 +188,7 @@ class ImpactKernel : public Kernel {
   ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
                int forceDims, double impulseScale, double torqueWeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 4 * model_->dofCount(); }  // not impulses
   // The rows' parts: root continuity, root impulse balance, impulsive joint torques, and the
   // contact points' velocity after the impact.
   enum class Part { Continuity, Balance, JointImpulse, PostVelocity };

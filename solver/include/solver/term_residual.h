@@ -33,6 +33,9 @@ struct AugmentedLagrangianState {
   // max(0, g), so minimising the sum of squares is a Gauss-Newton solve of c(x) = 0 (the
   // constraint step of Witkin & Kass 1988), which converges quadratically near the manifold.
   bool projectOnly = false;
+  // Raw mode (the Newton polish, newton_polish.h): every row passes through untouched, so the Jacobian
+  // Ceres evaluates is that of the objective, equality and inequality rows themselves.
+  bool raw = false;
   std::vector<double> lambda;  // one per row of every residual (objective rows unused)
 };
 
@@ -89,6 +92,9 @@ class TermResidual : public ceres::CostFunction {
   void rawRows(double const* const* parameters, double* rows) const;
   // The same at the parameters' current values.
   std::vector<double> rawRowsNow() const;
+  // B^T H_z B at the parameters' current values: the Hessian, in the stacked parameter blocks,
+  // of sum_r w[r] raw row r (Kernel::weightedHessian). Not for moving residuals.
+  Eigen::MatrixXd weightedHessianNow(const double* w) const;
 
   const Kernel& kernel() const { return *kernel_; }
   const std::vector<double*>& blocks() const { return blocks_; }

@@ -1,0 +1,384 @@
+// Newton (SQP) polish of an augmented-Lagrangian iterate (see newton_polish.h).
+#include "solver/newton_polish.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <thread>
+#include <unordered_map>
+
+namespace spacetime {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using SpMat = Eigen::SparseMatrix<double>;
+using SpRow = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+using Vec = Eigen::VectorXd;
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The parameter blocks that may move, in the order of the Jacobian's columns (Ceres's
+// Problem::Evaluate with these blocks), and the column of each of their coordinates. Held
+// stances keep some coordinates constant through a SubsetManifold: those have no column.
+struct Variables {
+  std::vector<double*> blocks;
+  std::vector<int> sizes;
+  std::vector<const ceres::Manifold*> manifolds;
+  std::unordered_map<const double*, std::vector<int>> columns;  // -1: constant
+  int tangent = 0;
+
+  explicit Variables(const ceres::Problem& problem) {
+    std::vector<double*> all;
+    problem.GetParameterBlocks(&all);
+    for (double* b : all) {
+      const int size = problem.ParameterBlockSize(b);
+      std::vector<int>& col = columns[b];
+      col.assign(size, -1);
+      if (problem.IsParameterBlockConstant(b)) continue;
+      blocks.push_back(b);
+      sizes.push_back(size);
+      const ceres::Manifold* manifold = problem.GetManifold(b);
+      manifolds.push_back(manifold);
+      if (!manifold) {
+        for (int a = 0; a < size; ++a) col[a] = tangent + a;
+        tangent += size;
+        continue;
+      }
+      // A SubsetManifold's Plus Jacobian is a selection: one 1 per moving coordinate.
+      const int ts = manifold->TangentSize();
+      std::vector<double> J(size * ts);
+      manifold->PlusJacobian(b, J.data());
+      for (int a = 0; a < size; ++a)
+        for (int t = 0; t < ts; ++t)
+          if (J[a * ts + t] != 0) col[a] = tangent + t;
+      tangent += ts;
+    }
+  }
+  std::vector<double> save() const {
+    std::vector<double> v;
+    for (size_t i = 0; i < blocks.size(); ++i) v.insert(v.end(), blocks[i], blocks[i] + sizes[i]);
+    return v;
+  }
+  void load(const std::vector<double>& v) const {
+    size_t k = 0;
+    for (size_t i = 0; i < blocks.size(); ++i) {
+      std::copy(v.begin() + k, v.begin() + k + sizes[i], blocks[i]);
+      k += sizes[i];
+    }
+  }
+  // blocks = from (+) step, through each block's manifold.
+  void plus(const std::vector<double>& from, const Vec& step) const {
+    size_t k = 0;
+    int t = 0;
+    for (size_t i = 0; i < blocks.size(); ++i) {
+      if (manifolds[i]) {
+        manifolds[i]->Plus(from.data() + k, step.data() + t, blocks[i]);
+        t += manifolds[i]->TangentSize();
+      } else {
+        for (int j = 0; j < sizes[i]; ++j) blocks[i][j] = from[k + j] + step[t + j];
+        t += sizes[i];
+      }
+      k += sizes[i];
+    }
+  }
+};
+
+// Every row of every residual in raw form, with its Jacobian in the tangent columns.
+struct RawRows {
+  Vec values;
+  SpRow jacobian;
+};
+
+class RawEvaluator {
+ public:
+  RawEvaluator(SpacetimeProblem& problem, const Variables& vars, int threads) : problem_(problem), vars_(vars) {
+    options_.parameter_blocks = vars.blocks;
+    options_.num_threads = threads;
+    problem.ceresProblem().GetResidualBlocks(&options_.residual_blocks);
+    for (ceres::ResidualBlockId id : options_.residual_blocks) {
+      terms_.push_back(dynamic_cast<const TermResidual*>(problem.ceresProblem().GetCostFunctionForResidualBlock(id)));
+      firstRow_.push_back(static_cast<int>(kind_.size()));
+      const auto& kinds = terms_.back()->kernel().rowKinds();
+      for (size_t i = 0; i < kinds.size(); ++i) {
+        kind_.push_back(kinds[i]);
+        multiplier_.push_back(terms_.back()->firstMultiplier() + static_cast<int>(i));
+      }
+    }
+  }
+  int rows() const { return static_cast<int>(kind_.size()); }
+  RowKind kind(int row) const { return kind_[row]; }
+  int multiplier(int row) const { return multiplier_[row]; }
+  bool anyMoving() const {
+    return std::any_of(terms_.begin(), terms_.end(), [](const TermResidual* t) { return !t || t->moving(); });
+  }
+
+  // Rows (and their Jacobian if asked) at the blocks' current values; false if not finite.
+  bool evaluate(RawRows* out, bool jacobian) {
+    AugmentedLagrangianState& al = problem_.augmentedLagrangian();
+    al.raw = true;
+    std::vector<double> values;
+    double cost = 0;
+    ceres::CRSMatrix J;
+    const bool ok = problem_.ceresProblem().Evaluate(options_, &cost, &values, nullptr, jacobian ? &J : nullptr);
+    al.raw = false;
+    if (!ok) return false;
+    out->values = Eigen::Map<const Vec>(values.data(), static_cast<Eigen::Index>(values.size()));
+    if (!out->values.allFinite()) return false;
+    if (jacobian) {
+      out->jacobian = SpRow(J.num_rows, J.num_cols);
+      Triplets t;
+      t.reserve(J.values.size());
+      for (int r = 0; r < J.num_rows; ++r)
+        for (int k = J.rows[r]; k < J.rows[r + 1]; ++k) t.emplace_back(r, J.cols[k], J.values[k]);
+      out->jacobian.setFromTriplets(t.begin(), t.end());
+    }
+    return true;
+  }
+
+  // Lower-triangle triplets of sum_rows w[row] grad^2 row, in the tangent columns, at the blocks'
+  // current values. Residuals are split over `threads` threads.
+  Triplets curvature(const Vec& w, int threads) const {
+    std::vector<Triplets> parts(threads);
+    auto work = [&](int part) {
+      for (size_t k = part; k < terms_.size(); k += threads) {
+        const TermResidual* term = terms_[k];
+        if (term->kernel().nonlinearInputs() == 0) continue;
+        const Eigen::MatrixXd H = term->weightedHessianNow(w.data() + firstRow_[k]);
+        std::vector<int> col;
+        for (const double* b : term->blocks()) {
+          const std::vector<int>& c = vars_.columns.at(b);
+          col.insert(col.end(), c.begin(), c.end());
+        }
+        for (int i = 0; i < H.rows(); ++i)
+          for (int j = 0; j < H.cols(); ++j)
+            if (col[i] >= 0 && col[j] >= 0 && col[i] >= col[j] && H(i, j) != 0)
+              parts[part].emplace_back(col[i], col[j], H(i, j));
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int p = 1; p < threads; ++p) pool.emplace_back(work, p);
+    work(0);
+    for (std::thread& t : pool) t.join();
+    Triplets all;
+    for (const Triplets& p : parts) all.insert(all.end(), p.begin(), p.end());
+    return all;
+  }
+
+ private:
+  SpacetimeProblem& problem_;
+  const Variables& vars_;
+  ceres::Problem::EvaluateOptions options_;
+  std::vector<const TermResidual*> terms_;
+  std::vector<int> firstRow_;
+  std::vector<RowKind> kind_;
+  std::vector<int> multiplier_;
+};
+
+}  // namespace
+
+PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& options,
+                          const std::atomic<bool>* cancel) {
+  const Clock::time_point start = Clock::now();
+  PolishResult result;
+  auto finish = [&](const std::string& reason) {
+    result.reason = reason;
+    result.seconds = secondsSince(start);
+    return result;
+  };
+  if (!problem.freeEnds().empty()) return finish("not run: free contact ends are bounded variables");
+  const Variables vars(problem.ceresProblem());
+  const int threads = std::max(1, options.threads);
+  RawEvaluator evaluator(problem, vars, threads);
+  if (evaluator.anyMoving()) return finish("not run: a residual moves with a free contact end");
+  AugmentedLagrangianState& al = problem.augmentedLagrangian();
+  const int n = vars.tangent, rowCount = evaluator.rows();
+
+  RawRows rows;
+  Clock::time_point t0 = Clock::now();
+  if (!evaluator.evaluate(&rows, true)) return finish("not run: a row is not finite");
+  result.jacobianSeconds += secondsSince(t0);
+
+  // Rows: objective rows (r), and the constraints held at zero: every equality and the
+  // inequalities the augmented Lagrangian found active. Multiplier estimates of the first step:
+  // lambda + rho * row (N&W eq. 17.39), whose sign also decides activity.
+  std::vector<int> objective;
+  std::vector<char> held(rowCount, 0), added(rowCount, 0);
+  Vec multipliers = Vec::Zero(rowCount);  // y of each held row
+  for (int r = 0; r < rowCount; ++r) {
+    const RowKind kind = evaluator.kind(r);
+    if (kind == RowKind::Objective) {
+      objective.push_back(r);
+      continue;
+    }
+    const double estimate = al.lambda[evaluator.multiplier(r)] + al.rho * rows.values[r];
+    if (kind == RowKind::Inequality && estimate <= 0) continue;
+    held[r] = 1;
+    multipliers[r] = estimate;
+  }
+  auto select = [](const SpRow& J, const std::vector<int>& which) {
+    SpRow S(static_cast<Eigen::Index>(which.size()), J.rows());
+    Triplets t;
+    for (size_t i = 0; i < which.size(); ++i) t.emplace_back(static_cast<int>(i), which[i], 1.0);
+    S.setFromTriplets(t.begin(), t.end());
+    return SpRow(S * J);
+  };
+  auto pick = [](const Vec& v, const std::vector<int>& which) {
+    Vec out(static_cast<Eigen::Index>(which.size()));
+    for (size_t i = 0; i < which.size(); ++i) out[static_cast<Eigen::Index>(i)] = v[which[i]];
+    return out;
+  };
+  auto inactiveViolation = [&](const Vec& values) {  // inequalities outside the active set
+    double worst = 0;
+    for (int r = 0; r < rowCount; ++r)
+      if (evaluator.kind(r) == RowKind::Inequality && !held[r]) worst = std::max(worst, values[r]);
+    return worst;
+  };
+
+  const std::vector<double> initial = vars.save();
+  std::vector<double> x = initial;
+  auto giveUp = [&](const std::string& why) {
+    vars.load(initial);
+    return finish(why);
+  };
+  const std::string outOfSteps = "no KKT point within " + std::to_string(options.maxIterations) + " Newton steps";
+  Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  bool analysed = false;  // the KKT pattern changes with the active set
+  // Regularisation: dw keeps W's diagonal positive, dc makes the constraint block quasi-definite
+  // so redundant held rows (degenerate contacts) still factorise; it acts on the change of y only.
+  const double dw = 1e-10, dc = 1e-8;
+  double lastShift = 0;
+  for (int it = 0;; ++it) {
+    std::vector<int> constraint;
+    for (int r = 0; r < rowCount; ++r)
+      if (held[r]) constraint.push_back(r);
+    const int m = static_cast<int>(constraint.size());
+    const Vec y = pick(multipliers, constraint);
+    const SpRow Jr = select(rows.jacobian, objective), A = select(rows.jacobian, constraint);
+    const Vec r = pick(rows.values, objective), c = pick(rows.values, constraint);
+    const Vec grad = Jr.transpose() * r;
+    const double kkt = (grad + A.transpose() * y).lpNorm<Eigen::Infinity>() /
+                       std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+    const double heldViolation = c.size() ? c.lpNorm<Eigen::Infinity>() : 0.0;
+    result.kktResidual = kkt;
+    result.maxViolation = std::max(heldViolation, inactiveViolation(rows.values));
+    result.iterations = it;
+
+    // The active set. An inequality a step violated is held from then on; one the polish added
+    // is released when its multiplier pulls. Rows held from the start are released only at a KKT
+    // point of the held rows: where a contact force vanishes the cone's sides and the normal
+    // force reach zero together, their multipliers are not unique, and releasing them on the
+    // way made the active set cycle (measured on luxo_jump).
+    const double pull = -1e-6 * std::max(1.0, y.lpNorm<Eigen::Infinity>());
+    const bool atKkt = kkt <= options.kktTolerance && result.maxViolation <= options.tolerance;
+    bool activeSetChanged = false;
+    for (int row = 0; row < rowCount; ++row)
+      if (evaluator.kind(row) == RowKind::Inequality && !held[row] && rows.values[row] > options.tolerance) {
+        held[row] = added[row] = 1;
+        activeSetChanged = true;
+      }
+    for (int i = 0; i < m; ++i) {
+      const int row = constraint[i];
+      if (evaluator.kind(row) == RowKind::Inequality && y[i] < pull && (added[row] || atKkt) &&
+          rows.values[row] <= options.tolerance) {
+        held[row] = 0;
+        multipliers[row] = 0;
+        activeSetChanged = true;
+      }
+    }
+    if (activeSetChanged) {
+      analysed = false;
+      if (it >= options.maxIterations) return giveUp(outOfSteps);
+      continue;
+    }
+    if (atKkt) {
+      // Every held inequality pushes: a KKT point of the whole problem. Hand the multipliers
+      // back (at c = 0 the augmented Lagrangian's lambda is y; zero for rows not held).
+      for (int row = 0; row < rowCount; ++row)
+        if (evaluator.kind(row) != RowKind::Objective)
+          al.lambda[evaluator.multiplier(row)] =
+              evaluator.kind(row) == RowKind::Equality ? multipliers[row] : std::max(0.0, multipliers[row]);
+      result.converged = true;
+      return finish("KKT conditions met");
+    }
+    if (it >= options.maxIterations) return giveUp(outOfSteps);
+    if (cancel && cancel->load()) return giveUp("cancelled");
+
+    // W = J_r^T J_r + curvature of the objective rows (weights r) and of the held constraints
+    // (weights y), the Hessian of the Lagrangian 1/2 |r|^2 + y.c_A.
+    Vec w = Vec::Zero(rowCount);
+    for (size_t i = 0; i < objective.size(); ++i) w[objective[i]] = r[static_cast<Eigen::Index>(i)];
+    for (int i = 0; i < m; ++i) w[constraint[i]] = y[i];
+    Triplets t = evaluator.curvature(w, threads);
+    const SpMat G = SpMat(Jr.transpose()) * Jr;
+    for (int k = 0; k < G.outerSize(); ++k)
+      for (SpMat::InnerIterator e(G, k); e; ++e)
+        if (e.row() >= e.col()) t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    for (int k = 0; k < A.outerSize(); ++k)
+      for (SpRow::InnerIterator e(A, k); e; ++e) t.emplace_back(n + static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    for (int i = 0; i < m; ++i) t.emplace_back(n + i, n + i, -dc);
+    // Inertia correction: the step minimises the local quadratic model on the constraints'
+    // tangent space only if K has exactly m negative eigenvalues, which the signs of LDL^T's D
+    // count (Sylvester's law of inertia).
+    const size_t base = t.size();
+    SpMat K(n + m, n + m);
+    double shift = 0;
+    bool factorised = false;
+    for (int attempt = 0; attempt < 30 && !factorised; ++attempt) {
+      t.resize(base);
+      for (int i = 0; i < n; ++i) t.emplace_back(i, i, dw + shift);
+      K.setFromTriplets(t.begin(), t.end());
+      if (!analysed) {
+        ldlt.analyzePattern(K);
+        analysed = true;
+      }
+      ldlt.factorize(K);
+      factorised = ldlt.info() == Eigen::Success && (ldlt.vectorD().array() < 0).count() == m;
+      if (!factorised) shift = shift == 0 ? (lastShift > 0 ? lastShift / 3 : 1e-4) : shift * 8;
+    }
+    if (!factorised) return giveUp("the Newton system could not be given the inertia of a minimum");
+    lastShift = shift;
+    Vec rhs(n + m);
+    rhs.head(n) = -grad;
+    rhs.tail(m) = -c - dc * y;
+    // LDL^T of an indefinite matrix without pivoting loses digits (measured: residual 1e-3 of
+    // the right-hand side on luxo_jump); three steps of iterative refinement restore them.
+    Vec d = ldlt.solve(rhs);
+    for (int refine = 0; refine < 3; ++refine) d += ldlt.solve(Vec(rhs - K.selfadjointView<Eigen::Lower>() * d));
+    if (!d.allFinite()) return giveUp("the Newton step is not finite");
+
+    // Full Newton steps near a KKT point; halve while the step makes the violation or the KKT
+    // residual worse (the polish is local: a step that keeps failing means the active set or the
+    // starting point is not good enough, and the augmented Lagrangian carries on).
+    RawRows trial;
+    bool accepted = false;
+    for (double alpha = 1; alpha >= 0.125 && !accepted; alpha /= 2) {
+      vars.plus(x, alpha * d.head(n));
+      t0 = Clock::now();
+      const bool finite = evaluator.evaluate(&trial, true);
+      result.jacobianSeconds += secondsSince(t0);
+      if (!finite) continue;
+      const Vec yTrial = y + alpha * (d.tail(m) - y);
+      const SpRow At = select(trial.jacobian, constraint), Jt = select(trial.jacobian, objective);
+      const Vec gt = Jt.transpose() * pick(trial.values, objective);
+      const Vec ct = pick(trial.values, constraint);
+      const double kktTrial = (gt + At.transpose() * yTrial).lpNorm<Eigen::Infinity>() / std::max(1.0, gt.lpNorm<Eigen::Infinity>());
+      // Only the held rows judge the step: an inequality it violates is held at the next step.
+      const double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;
+      accepted = std::max(kktTrial, violTrial) < std::max(kkt, heldViolation);
+      if (accepted)
+        for (int i = 0; i < m; ++i) multipliers[constraint[i]] = yTrial[i];
+    }
+    if (!accepted) return giveUp("a Newton step did not reduce the KKT residual");
+    x = vars.save();
+    rows = std::move(trial);
+  }
+}
+
+}  // namespace spacetime

@@ -1,0 +1,142 @@
+// The Newton polish (solver/newton_polish.h): its exact Hessians against second differences of
+// the rows, and its optimum against the analytic particle and against the augmented Lagrangian
+// alone on the Luxo jump.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "../shipped_scene.h"
+#include "split_landing.h"
+#include "solver/augmented_lagrangian.h"
+#include "solver/newton_polish.h"
+#include "solver/validity.h"
+
+namespace spacetime {
+namespace {
+
+// Sum_r w_r row_r at the residual's parameters, in plain doubles (no Jets, no Jacobians): the
+// independent function whose second differences the exact Hessian must match.
+double weightedRows(const TermResidual& res, const std::vector<double>& w) {
+  std::vector<const double*> params(res.blocks().begin(), res.blocks().end());
+  std::vector<double> rows(w.size());
+  res.rawRows(params.data(), rows.data());
+  double sum = 0;
+  for (size_t r = 0; r < w.size(); ++r) sum += w[r] * rows[r];
+  return sum;
+}
+
+class TermHessians : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(TermHessians, MatchSecondDifferences) {
+  const std::string param = GetParam();
+  const std::string name = param.substr(0, param.find(':'));
+  Scene scene = testing::shippedScene(name);
+  if (param.size() > name.size()) scene = testing::withSplitLanding(scene);  // shared impacts
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (double& x : problem->variables()) x += noise(rng);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int checked = 0, nonzero = 0;
+  for (const TermResidual* res : problem->residuals()) {
+    if (res->moving()) continue;
+    const int m = res->num_residuals();
+    std::vector<double> w(m);
+    for (double& x : w) x = noise(rng) * 20;
+    const Eigen::MatrixXd H = res->weightedHessianNow(w.data());
+    ASSERT_TRUE(H.allFinite()) << res->kernel().label();
+    EXPECT_LT((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-6 * (1 + H.cwiseAbs().maxCoeff()));
+    // Every coordinate of every parameter block, flattened as weightedHessianNow stacks them.
+    std::vector<double*> coord;
+    for (size_t b = 0; b < res->blocks().size(); ++b)
+      for (int i = 0; i < res->parameter_block_sizes()[b]; ++i) coord.push_back(res->blocks()[b] + i);
+    ASSERT_EQ(static_cast<Eigen::Index>(coord.size()), H.rows());
+    // Random pairs (a full sweep is n^2 evaluations per residual): central second differences,
+    // error O(h^2) plus rounding of order eps |f| / h^2.
+    const int pairs = std::min<int>(40, static_cast<int>(coord.size() * coord.size()));
+    for (int k = 0; k < pairs; ++k) {
+      const int i = static_cast<int>(unit(rng) * coord.size()), j = static_cast<int>(unit(rng) * coord.size());
+      const double h = 1e-4;
+      double* xi = coord[i];
+      double* xj = coord[j];
+      auto at = [&](double si, double sj) {
+        const double savedI = *xi;
+        *xi += si * h;
+        const double savedJ = *xj;  // i == j: the second shift adds to the first
+        *xj += sj * h;
+        const double f = weightedRows(*res, w);
+        *xj = savedJ;
+        *xi = savedI;
+        return f;
+      };
+      const double fd = (at(1, 1) - at(1, -1) - at(-1, 1) + at(-1, -1)) / (4 * h * h);
+      EXPECT_NEAR(H(i, j), fd, 2e-4 * (1 + std::abs(fd))) << res->kernel().label() << " (" << i << ", " << j << ")";
+      ++checked;
+      if (std::abs(fd) > 1e-3) ++nonzero;
+    }
+  }
+  EXPECT_GT(checked, 5000);
+  EXPECT_GT(nonzero, 500);  // the dynamics' curvature is really exercised, not only zeros
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, TermHessians,
+                         ::testing::Values("luxo_jump.json", "luxo_3d.json", "luxo_jump.json:split"));
+
+// The seed's particle is a quadratic problem: the polish's first Newton step is exact, so the
+// optimum matches the analytic one far below the default tolerance's 1e-6.
+TEST(NewtonPolish, ParticleLandsOnTheAnalyticMinimum) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene("particle.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  const SolverSummary s = solveSpacetime(*problem, SolverOptions{});
+  ASSERT_TRUE(s.converged) << s.reason;
+  EXPECT_TRUE(s.polished) << s.reason;
+  // Seed Figure 7: h = 1/2, m = 1; per axis 2 h M1^2 / 3 with M1 = 6 (y0 - 2 y1 + y2) / (4 h^2)
+  // (particle_test.cpp derives it); axes x, y, z give 432 + 0 + 12.
+  EXPECT_NEAR(s.objective, 444.0, 444.0 * 1e-9);
+  EXPECT_LT(s.maxViolation, 1e-9);
+}
+
+// The Luxo jump with and without the polish: the same optimum (the polish's is the lower, a
+// KKT point), every validity check passing, and fewer Levenberg-Marquardt iterations.
+TEST(NewtonPolish, LuxoJumpReachesTheAugmentedLagrangiansOptimumSooner) {
+  const Scene scene = testing::shippedScene("luxo_jump.json");
+  std::string error;
+  auto polished = SpacetimeProblem::build(scene, &error);
+  auto plain = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(polished && plain) << error;
+  SolverOptions options = solverOptionsFor(scene.solver);
+  options.threads = 2;
+  const SolverSummary p = solveSpacetime(*polished, options);
+  options.newtonPolish = false;
+  const SolverSummary a = solveSpacetime(*plain, options);
+  ASSERT_TRUE(p.converged && a.converged) << p.reason << " / " << a.reason;
+  EXPECT_TRUE(p.polished);
+  EXPECT_FALSE(a.polished);
+  EXPECT_NEAR(p.objective / a.objective, 1.0, 1e-5);
+  EXPECT_LE(p.objective, a.objective * (1 + 1e-8));
+  EXPECT_LT(p.iterations, a.iterations * 3 / 4) << p.iterations << " vs " << a.iterations;
+  const ValidityReport v = checkValidity(*polished);
+  for (const ValidityCheck& c : validityChecklist(v)) EXPECT_TRUE(c.pass) << c.name << ": " << c.value;
+}
+
+// Far from the optimum the polish gives up and leaves every variable exactly as it found it.
+TEST(NewtonPolish, GivesUpWithoutChangingAnything) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  const std::vector<double> before = problem->variables();
+  const std::vector<double> lambdaBefore = problem->augmentedLagrangian().lambda;
+  PolishOptions options;
+  options.maxIterations = 2;
+  const PolishResult r = polishNewton(*problem, options);
+  EXPECT_FALSE(r.converged);
+  EXPECT_FALSE(r.reason.empty());
+  EXPECT_EQ(problem->variables(), before);
+  EXPECT_EQ(problem->augmentedLagrangian().lambda, lambdaBefore);
+}
+
+}  // namespace
+}  // namespace spacetime
