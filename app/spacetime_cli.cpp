@@ -20,7 +20,7 @@ using namespace spacetime;
 namespace {
 
 int usage(const char* why) {
-  std::fprintf(stderr, "spacetime-cli: %s\nusage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--quiet]\n", why);
+  std::fprintf(stderr, "spacetime-cli: %s\nusage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--quiet] [--no-polish]\n", why);
   return 2;
 }
 
@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   std::string scenePath, outDir;
   double rate = 1000;
   bool quiet = false;
+  bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) outDir = argv[++i];
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
       rate = std::strtod(argv[++i], &end);
       if (!end || *end || !(rate > 0) || rate > 1e5) return usage("--rate must be a number of frames per second in (0, 100000]");
     } else if (a == "--quiet") quiet = true;
+    else if (a == "--no-polish") polish = false;
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (scenePath.empty()) scenePath = a;
     else return usage(("unexpected argument " + a).c_str());
@@ -59,6 +61,7 @@ int main(int argc, char** argv) {
   }
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = 2;  // Ceres evaluates residual blocks in parallel (kernels are thread-safe)
+  options.newtonPolish = polish;
   ProgressCallback progress = nullptr;
   if (!quiet)
     progress = [](const IterationReport& r) {

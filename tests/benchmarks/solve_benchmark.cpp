@@ -16,12 +16,15 @@ namespace spacetime {
 namespace {
 
 // With samplesPerSegment > 0 the scene's transcription is overridden (2: the coarse preview,
-// which converges but fails the dense-grid check).
-void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSegment = 0) {
+// which converges but fails the dense-grid check); polish = false runs the augmented Lagrangian
+// without its Newton polish, to measure what the polish saves.
+void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSegment = 0,
+              bool polish = true) {
   Scene scene = testing::shippedScene(name);
   if (samplesPerSegment > 0) scene.transcription.samplesPerSegment = samplesPerSegment;
   bool converged = true;
   double violation = 0;
+  int iterations = 0, newtonSteps = 0;
   for (auto _ : state) {
     state.PauseTiming();
     std::string error;
@@ -29,12 +32,17 @@ void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSe
     state.ResumeTiming();
     SolverOptions options = solverOptionsFor(scene.solver);  // as spacetime-cli uses them
     options.maxSeconds = 120;
+    options.newtonPolish = polish;
     const SolverSummary s = solveSpacetime(*problem, options);
     converged = converged && s.converged;
     violation = std::max(violation, s.maxViolation);
+    iterations = s.iterations;
+    newtonSteps = s.newtonSteps;
   }
   state.counters["converged"] = converged ? 1 : 0;
   state.counters["max_violation"] = violation;
+  state.counters["lm_iterations"] = iterations;
+  state.counters["newton_steps"] = newtonSteps;
 }
 
 // One full residual + Jacobian evaluation of the jump; with `freeLiftOff`, the take-off's end is
@@ -60,6 +68,7 @@ void BM_LuxoJacobian(benchmark::State& state, bool freeLiftOff) {
 BENCHMARK_CAPTURE(BM_Solve, particle, std::string("particle.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, particle_gravity, std::string("particle_gravity.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, luxo_jump, std::string("luxo_jump.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_jump_without_polish, std::string("luxo_jump.json"), 0, false)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_hurdle, std::string("luxo_hurdle.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_heavy, std::string("luxo_heavy.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_power_formula, std::string("luxo_power_formula.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

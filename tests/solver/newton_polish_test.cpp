@@ -82,7 +82,8 @@ TEST_P(TermHessians, MatchSecondDifferences) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, TermHessians,
-                         ::testing::Values("luxo_jump.json", "luxo_3d.json", "luxo_jump.json:split"));
+                         ::testing::Values("luxo_jump.json", "luxo_3d.json", "luxo_jump.json:split",
+                                           "luxo_power_formula.json", "luxo_hurdle.json"));
 
 // The seed's particle is a quadratic problem: the polish's first Newton step is exact, so the
 // optimum matches the analytic one far below the default tolerance's 1e-6.
