@@ -45,6 +45,40 @@ void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSe
   state.counters["newton_steps"] = newtonSteps;
 }
 
+// What the editor does while an animator drags: luxo_jump solved, then its end pose moved 2 cm
+// further (base_x 0.60 -> 0.62) and re-solved warm from the previous solution and multipliers
+// (the same structure, so SpacetimeProblem::restore). Timed: the warm re-solve only.
+void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02) {
+  Scene scene = testing::shippedScene("luxo_jump.json");
+  std::string error;
+  auto first = SpacetimeProblem::build(scene, &error);
+  SolverOptions options = solverOptionsFor(scene.solver);
+  options.newtonPolish = polish;
+  solveSpacetime(*first, options);
+  const SolutionState solved = first->state();
+  for (TermSpec& t : scene.terms)
+    if (t.id == "end_pose")
+      for (auto& [dof, value] : t.values)
+        if (dof == "base_x") value += move;
+  bool converged = true;
+  int iterations = 0, newtonSteps = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto moved = SpacetimeProblem::build(scene, &error);
+    const bool restored = moved->restore(solved);
+    state.ResumeTiming();
+    SolverOptions warm = options;
+    warm.warmStart = restored;
+    const SolverSummary s = solveSpacetime(*moved, warm);
+    converged = converged && restored && s.converged;
+    iterations = s.iterations;
+    newtonSteps = s.newtonSteps;
+  }
+  state.counters["converged"] = converged ? 1 : 0;
+  state.counters["lm_iterations"] = iterations;
+  state.counters["newton_steps"] = newtonSteps;
+}
+
 // One full residual + Jacobian evaluation of the jump; with `freeLiftOff`, the take-off's end is
 // a variable (its window's residuals rebuild their input maps from it at every evaluation).
 void BM_LuxoJacobian(benchmark::State& state, bool freeLiftOff) {
@@ -74,6 +108,10 @@ BENCHMARK_CAPTURE(BM_Solve, luxo_heavy, std::string("luxo_heavy.json"))->Unit(be
 BENCHMARK_CAPTURE(BM_Solve, luxo_power_formula, std::string("luxo_power_formula.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_jump_2_samples, std::string("luxo_jump.json"), 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_3d, std::string("luxo_3d.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm, true)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_without_polish, false)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm, true, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_without_polish, false, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, fixed_lift_off, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, free_lift_off, true)->Unit(benchmark::kMillisecond);
 
