@@ -62,6 +62,7 @@ void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02
         if (dof == "base_x") value += move;
   bool converged = true;
   int iterations = 0, newtonSteps = 0;
+  double objective = 0;
   for (auto _ : state) {
     state.PauseTiming();
     auto moved = SpacetimeProblem::build(scene, &error);
@@ -73,10 +74,12 @@ void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02
     converged = converged && restored && s.converged;
     iterations = s.iterations;
     newtonSteps = s.newtonSteps;
+    objective = s.objective;
   }
   state.counters["converged"] = converged ? 1 : 0;
   state.counters["lm_iterations"] = iterations;
   state.counters["newton_steps"] = newtonSteps;
+  state.counters["objective"] = objective;
 }
 
 // One full residual + Jacobian evaluation of the jump; with `freeLiftOff`, the take-off's end is
