@@ -10,6 +10,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <thread>
 
 #include "core/scene_io.h"
@@ -67,8 +68,8 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   ++running_;
   ++alive_;
   QPointer<SolverJob> self(this);
-  const int threadCount = threads;
-  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount]() {
+  const int threadCount = threads, liveInterval = liveIntervalMs;
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount, liveInterval]() {
     // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
     // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
     // SCHED_IDLE runs it only on otherwise idle time; nice 15 alone was not enough once the
@@ -116,7 +117,10 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       }
       const SolverSummary summary = solveSpacetime(
           *problem, options,
-          [&](const IterationReport& r) {
+          [&, lastLive = std::chrono::steady_clock::now()](const IterationReport& r) mutable {
+            const auto now = std::chrono::steady_clock::now();
+            if (now - lastLive < std::chrono::milliseconds(liveInterval)) return !run->cancel.load();
+            lastLive = now;
             auto motion = sampleMotion(*problem);
             motion->objective = r.objective;
             motion->maxViolation = r.maxViolation;
