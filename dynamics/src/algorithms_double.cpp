@@ -10,7 +10,7 @@ template void forwardKinematics<double, double>(const Model<double>&, Data<doubl
                                                 const double*, const double*, const double*);
 template const VecX<double>& rnea<double, double>(const Model<double>&, Data<double>&,
                                                   const double*, const double*, const double*,
-                                                  const std::vector<PointForce<double>>&, bool);
+                                                  const std::vector<PointForce<double>>&, bool, bool);
 template MatX<double> crba<double, double>(const Model<double>&, Data<double>&, const double*);
 template VecX<double> aba<double, double>(const Model<double>&, Data<double>&, const double*,
                                           const double*, const double*,

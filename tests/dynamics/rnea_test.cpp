@@ -147,6 +147,64 @@ TEST_P(RandomModels, ExternalForceEqualsJacobianTranspose) {
   EXPECT_LT((pointVelocity(d, body, pLocal) - J * qd).norm(), 1e-7);
 }
 
+// One body's pose along its chain alone equals the whole forward sweep's.
+TEST_P(RandomModels, BodyPoseEqualsForwardKinematics) {
+  std::mt19937 rng(29);
+  const Model<double> model = buildModel(testing::randomCharacter(rng, 7, GetParam()), {0, -g, 0});
+  Data<double> d(model);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd q = testing::randomVector(rng, model.dofCount(), 2);
+    forwardKinematics(model, d, q.data());
+    for (int b = 0; b < model.bodyCount(); ++b) {
+      const Transform<double> X = bodyPose(model, q.data(), b);
+      EXPECT_LT((X.matrix() - d.X_world[b].matrix()).norm(), 1e-12) << "body " << b;
+      const Eigen::Vector3d p = testing::randomVec(rng);
+      EXPECT_LT((pointPosition(X, p) - pointPosition(d, b, p)).norm(), 1e-12);
+    }
+  }
+}
+
+// RNEA composing only the forced bodies' world poses gives the same generalized forces.
+TEST_P(RandomModels, RneaWithoutAllWorldPosesIsTheSame) {
+  std::mt19937 rng(31);
+  const Model<double> model = buildModel(testing::randomCharacter(rng, 7, GetParam()), {0.2, -g, 0});
+  Data<double> full(model), lean(model);
+  const int n = model.dofCount();
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd q = testing::randomVector(rng, n, 2), qd = testing::randomVector(rng, n, 2),
+                          qdd = testing::randomVector(rng, n, 2);
+    std::vector<PointForce<double>> fext;
+    for (int b : {model.bodyCount() - 1, model.bodyCount() - 1, model.bodyCount() / 2}) {
+      PointForce<double> pf{b, testing::randomVec(rng), testing::randomVec(rng)};
+      pf.pointIsLocal = trial % 2 == 0;
+      fext.push_back(pf);
+    }
+    const Eigen::VectorXd a = rnea(model, full, q.data(), qd.data(), qdd.data(), fext);
+    const Eigen::VectorXd b = rnea(model, lean, q.data(), qd.data(), qdd.data(), fext, true, false);
+    EXPECT_LT((a - b).norm(), 1e-12 * (1 + a.norm()));
+  }
+}
+
+// One point force's generalized force along its chain equals the difference it makes to RNEA.
+TEST_P(RandomModels, PointForceGeneralizedEqualsRneaDifference) {
+  std::mt19937 rng(37);
+  const Model<double> model = buildModel(testing::randomCharacter(rng, 7, GetParam()), {0, -g, 0});
+  Data<double> d(model);
+  const int n = model.dofCount();
+  for (int body = 0; body < model.bodyCount(); ++body) {
+    const Eigen::VectorXd q = testing::randomVector(rng, n, 2), qd = testing::randomVector(rng, n, 2),
+                          qdd = testing::randomVector(rng, n, 2);
+    PointForce<double> pf{body, testing::randomVec(rng), testing::randomVec(rng)};
+    pf.pointIsLocal = body % 2 == 0;
+    const Eigen::VectorXd withForce = rnea(model, d, q.data(), qd.data(), qdd.data(), {pf});
+    const Eigen::VectorXd expected = withForce - rnea(model, d, q.data(), qd.data(), qdd.data());
+    forwardKinematics(model, d, q.data());
+    Eigen::VectorXd tau = Eigen::VectorXd::Zero(n);
+    addPointForceGeneralized(model, d, pf, tau.data());
+    EXPECT_LT((tau - expected).norm(), 1e-10 * (1 + expected.norm())) << "body " << body;
+  }
+}
+
 TEST_P(RandomModels, MomentumAndEnergy) {
   std::mt19937 rng(14);
   const Model<double> model = buildModel(testing::randomCharacter(rng, 6, GetParam()), {0, -g, 0});

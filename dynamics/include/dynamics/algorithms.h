@@ -25,15 +25,16 @@ Motion<T> baseAcceleration(const Model<S>& model, bool withGravity) {
 }
 
 // The forward sweep shared by FK and RNEA (RBDA Table 5.1, first loop).
+// worldPoses = false leaves X_world alone (RNEA itself needs only X_parent).
 template <class T, class S>
 void forwardSweep(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd,
-                  const Motion<T>& a0) {
+                  const Motion<T>& a0, bool worldPoses = true) {
   for (int i = 0; i < model.bodyCount(); ++i) {
     const Body<S>& b = model.bodies[i];
     const int k = b.dofIndex;
     const Transform<T> XJ = k >= 0 ? b.joint.template transform<T>(q[k]) : Transform<T>();
     d.X_parent[i] = compose(XJ, b.X_tree);
-    d.X_world[i] = b.parent >= 0 ? d.X_parent[i] * d.X_world[b.parent] : d.X_parent[i];
+    if (worldPoses) d.X_world[i] = b.parent >= 0 ? d.X_parent[i] * d.X_world[b.parent] : d.X_parent[i];
     Motion<T> vJ, aJ;
     if (k >= 0) {
       const Motion<S> Sj = b.joint.motionSubspace();
@@ -53,6 +54,12 @@ void forwardSweep(const Model<S>& model, Data<T>& d, const T* q, const T* qd, co
       d.a[i] = d.X_parent[i].apply(a0) + aJ;
     }
   }
+}
+// A body's world pose from the sweep's X_parent along its chain.
+template <class T, class S>
+Transform<T> chainPose(const Model<S>& model, const Data<T>& d, int body) {
+  const int parent = model.bodies[body].parent;
+  return parent >= 0 ? d.X_parent[body] * chainPose(model, d, parent) : d.X_parent[body];
 }
 // A point force as a spatial force in body coordinates (after the forward sweep).
 template <class T>
@@ -79,14 +86,31 @@ void forwardKinematics(const Model<S>& model, Data<T>& d, const T* q, const T* q
   detail::forwardSweep<T, S>(model, d, q, qd, qdd, Motion<T>());
 }
 
-// World position of a point given in body coordinates (after forwardKinematics).
+// The pose (world -> body, as Data::X_world) of one body from q alone: the joint and tree
+// transforms of its ancestors composed root first (the X_world recursion of RBDA Table 5.1 along
+// one chain). Kernels that need one body's pose (pins, clearances, contact anchors) skip the other
+// bodies and the velocities forwardKinematics computes: with Jets, a third of the cost on Luxo.
 template <class T, class S>
-Vec3<T> pointPosition(const Data<T>& d, int body, const Vec3<S>& p) {
-  const Transform<T>& X = d.X_world[body];
+Transform<T> bodyPose(const Model<S>& model, const T* q, int body) {
+  const Body<S>& b = model.bodies[body];
+  const Transform<T> XJ = b.dofIndex >= 0 ? b.joint.template transform<T>(q[b.dofIndex]) : Transform<T>();
+  const Transform<T> X_parent = compose(XJ, b.X_tree);
+  return b.parent >= 0 ? X_parent * bodyPose(model, q, b.parent) : X_parent;
+}
+
+// World position of a point given in body coordinates, from the body's pose.
+template <class T, class S>
+Vec3<T> pointPosition(const Transform<T>& X, const Vec3<S>& p) {
   Vec3<T> out;
   for (int i = 0; i < 3; ++i)
     out(i) = X.E(0, i) * p(0) + X.E(1, i) * p(1) + X.E(2, i) * p(2) + X.r(i);
   return out;
+}
+
+// World position of a point given in body coordinates (after forwardKinematics).
+template <class T, class S>
+Vec3<T> pointPosition(const Data<T>& d, int body, const Vec3<S>& p) {
+  return pointPosition(d.X_world[body], p);
 }
 
 // World velocity of a body-fixed point: E^T (v + w x p).
@@ -110,12 +134,19 @@ Vec3<T> pointAcceleration(const Data<T>& d, int body, const Vec3<S>& p) {
 }
 
 // Recursive Newton-Euler inverse dynamics (RBDA Table 5.1) with external point forces.
-// Writes the generalized forces into d.tau and returns them.
+// Writes the generalized forces into d.tau and returns them. allWorldPoses = false fills X_world
+// only for the bodies external forces act on: the solver's per-sample dynamics read nothing
+// else, and composing every world pose was ~30 % of a forward sweep with Jets.
 template <class T, class S>
 const VecX<T>& rnea(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd,
-                    const std::vector<PointForce<T>>& fext = {}, bool withGravity = true) {
+                    const std::vector<PointForce<T>>& fext = {}, bool withGravity = true,
+                    bool allWorldPoses = true) {
   detail::forwardSweep<T, S>(model, d, q, qd, qdd,
-                             detail::baseAcceleration<T, S>(model, withGravity));
+                             detail::baseAcceleration<T, S>(model, withGravity), allWorldPoses);
+  if (!allWorldPoses)
+    for (size_t k = 0; k < fext.size(); ++k)
+      if (k == 0 || fext[k].body != fext[k - 1].body)
+        d.X_world[fext[k].body] = detail::chainPose(model, d, fext[k].body);
   for (int i = 0; i < model.bodyCount(); ++i) {
     const Inertia<S>& I = model.bodies[i].inertia;
     if (model.bodies[i].isVirtual && I.mass == S(0)) {
@@ -136,6 +167,21 @@ const VecX<T>& rnea(const Model<S>& model, Data<T>& d, const T* q, const T* qd, 
     if (b.parent >= 0) d.f[b.parent] += d.X_parent[i].applyInverse(d.f[i]);
   }
   return d.tau;
+}
+
+// Adds the generalized force of one external point force alone, -J^T F, to tau: the backward
+// pass of RBDA Table 5.1 with the force as the only body force (no motion, no gravity), along
+// the force body's chain only. Needs the sweep's X_parent and the force body's X_world (after
+// forwardKinematics or crba). The solver's d tau / d f columns, one per force component.
+template <class T, class S>
+void addPointForceGeneralized(const Model<S>& model, const Data<T>& d, const PointForce<T>& pf,
+                              T* tau) {
+  Force<T> f = Force<T>() - detail::bodyForce(d, pf);
+  for (int i = pf.body; i >= 0; i = model.bodies[i].parent) {
+    const Body<S>& b = model.bodies[i];
+    if (b.dofIndex >= 0) tau[b.dofIndex] += dot(b.joint.motionSubspace().template cast<T>(), f);
+    if (b.parent >= 0) f = d.X_parent[i].applyInverse(f);
+  }
 }
 
 // Joint-space inertia matrix by the composite-rigid-body algorithm (RBDA Table 6.2).
