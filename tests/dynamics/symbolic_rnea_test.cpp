@@ -11,6 +11,7 @@
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
+#include "dynamics/compiled_dynamics.h"
 #include "random_model.h"
 
 namespace spacetime {
@@ -52,6 +53,30 @@ TEST_P(SymbolicRnea, CompiledTapeEqualsNativeAndRebuildAddsNoNodes) {
     tape.evaluate(z.data(), 0.0, out.data(), work);
     const Eigen::VectorXd native = rnea(model, data, z.data(), z.data() + n, z.data() + 2 * n);
     for (int i = 0; i < n; ++i) EXPECT_NEAR(out[i], native[i], 1e-12 * (1 + native.cwiseAbs().maxCoeff()));
+  }
+}
+
+// The solver's compiled inverse dynamics (contact forces as variables) equals the native RNEA
+// with the same point forces, planar (2 force components) and 3D (3).
+TEST_P(SymbolicRnea, CompiledInverseDynamicsWithContactsEqualsNative) {
+  const Scene scene = testing::shippedScene(GetParam());
+  const Model<double> model = buildModel(scene.characters[0], scene.gravity);
+  const int n = model.dofCount();
+  std::mt19937 rng(11);
+  for (int forceDims : {2, 3}) {
+    std::vector<ContactPoints> contacts = {{model.bodyCount() - 1, {testing::randomVec(rng), testing::randomVec(rng)}},
+                                           {model.bodyCount() / 2, {testing::randomVec(rng)}}};
+    const expr::Tape tape = compileInverseDynamics(model, contacts, forceDims);
+    Data<double> data(model);
+    std::vector<double> work, out(n);
+    for (int trial = 0; trial < 50; ++trial) {
+      const Eigen::VectorXd z = testing::randomVector(rng, 3 * n + 3 * forceDims, 2.0);
+      tape.evaluate(z.data(), 0.0, out.data(), work);
+      const Eigen::VectorXd native = rnea(model, data, z.data(), z.data() + n, z.data() + 2 * n,
+                                          contactPointForces(contacts, z.data() + 3 * n, forceDims));
+      for (int i = 0; i < n; ++i)
+        EXPECT_NEAR(out[i], native[i], 1e-12 * (1 + native.cwiseAbs().maxCoeff())) << "dof " << i;
+    }
   }
 }
 
