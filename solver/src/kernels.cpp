@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 
 #include "dynamics/algorithms.h"
+#include "dynamics/compiled_dynamics.h"
 
 namespace spacetime {
 
@@ -16,6 +18,50 @@ void seedChunk(const double* z, int n, int start, int end, JetChunk* zj) {
     zj[i] = JetChunk(z[i]);
     if (i >= start && i < end) zj[i].v[i - start] = 1.0;
   }
+}
+// This thread's reusable Data for one scalar type, sized for the model. Kernels run on Ceres's
+// worker threads for every sample of every iteration, and allocating Data's vectors on each call
+// was ~8 % of a Jacobian evaluation (perf, luxo_jump). A kernel may use it for one computation
+// at a time (sequential reuse within a call is fine).
+template <class T>
+Data<T>& scratchData(const Model<double>& model) {
+  thread_local Data<T> data;
+  data.resize(model);
+  return data;
+}
+// The compiled inverse dynamics of a model with a set of active contacts, built once and shared
+// by every sample with that set (a problem has a few such sets and hundreds of samples). The
+// model is held weakly: an entry whose model is gone is stale even if another model later
+// lives at the same address.
+// `weighted`: compileWeightedInverseDynamics (the Hessians) instead of compileInverseDynamics.
+std::shared_ptr<const expr::Tape> inverseDynamicsTape(const std::shared_ptr<const Model<double>>& model,
+                                                      const std::vector<ContactPoints>& contacts,
+                                                      int forceDims, bool weighted = false) {
+  struct Entry {
+    std::weak_ptr<const Model<double>> model;
+    std::vector<ContactPoints> contacts;
+    int forceDims;
+    bool weighted;
+    std::shared_ptr<const expr::Tape> tape;
+  };
+  static std::mutex mutex;
+  static std::vector<Entry> cache;
+  auto same = [&](const std::vector<ContactPoints>& a) {
+    if (a.size() != contacts.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+      if (a[i].body != contacts[i].body || a[i].points != contacts[i].points) return false;
+    return true;
+  };
+  std::lock_guard<std::mutex> lock(mutex);
+  std::erase_if(cache, [](const Entry& e) { return e.model.expired(); });
+  for (const Entry& e : cache)
+    if (e.model.lock() == model && e.forceDims == forceDims && e.weighted == weighted && same(e.contacts))
+      return e.tape;
+  auto tape = std::make_shared<const expr::Tape>(
+      weighted ? compileWeightedInverseDynamics(*model, contacts, forceDims)
+               : compileInverseDynamics(*model, contacts, forceDims));
+  cache.push_back({model, contacts, forceDims, weighted, tape});
+  return tape;
 }
 }  // namespace
 
@@ -78,6 +124,8 @@ DynamicsKernel::DynamicsKernel(std::shared_ptr<const Model<double>> model,
     : model_(std::move(model)), contacts_(std::move(contacts)), forceDims_(forceDims),
       options_(options) {
   label_ = std::move(label);
+  tau_ = inverseDynamicsTape(model_, contacts_, forceDims_);
+  weightedTau_ = inverseDynamicsTape(model_, contacts_, forceDims_, /*weighted=*/true);
   const int n = model_->dofCount();
   inputs_ = 3 * n;
   for (const auto& c : contacts_) inputs_ += forceDims_ * static_cast<int>(c.points.size());
@@ -101,13 +149,11 @@ DynamicsKernel::DynamicsKernel(std::shared_ptr<const Model<double>> model,
 }
 
 template <class T>
-VecX<T> DynamicsKernel::generalizedForces(const T* z, bool withMotion, bool withGravity) const {
-  const int n = model_->dofCount();
-  const std::vector<PointForce<T>> fext = contactPointForces(contacts_, z + 3 * n, forceDims_);
-  Data<T> data(*model_);
-  const T* none = nullptr;
-  return rnea(*model_, data, z, withMotion ? z + n : none, withMotion ? z + 2 * n : none, fext,
-              withGravity);
+VecX<T> DynamicsKernel::generalizedForces(const T* z) const {
+  thread_local std::vector<T> work;  // the tape's slots; tapes hold no scratch of their own
+  VecX<T> tau(model_->dofCount());
+  tau_->evaluate(z, T(0.0), tau.data(), work);
+  return tau;
 }
 
 template <class T>
@@ -158,15 +204,21 @@ void DynamicsKernel::evaluateWithJacobian(const double* z, double* rows, double*
     }
   }
   // d tau / d qdd = M(q) (RBDA Table 6.2).
-  Data<double> data(*model_);
+  Data<double>& data = scratchData<double>(*model_);
   dtau.block(0, 2 * n, n, n) = crba(*model_, data, z);
-  // d tau / d f_k: RNEA with only the unit force k (linear, so exact).
-  std::vector<double> unit(z, z + nz);
-  for (int k = 3 * n; k < nz; ++k) {
-    std::fill(unit.begin() + 3 * n, unit.end(), 0.0);
-    unit[k] = 1.0;
-    dtau.col(k) = generalizedForces(unit.data(), /*withMotion=*/false, /*withGravity=*/false);
-  }
+  // d tau / d f_k = -J^T e_k: the unit force k alone, along its body's chain (crba left the poses
+  // in data).
+  int k = 3 * n;
+  for (const ContactPoints& c : contacts_)
+    for (const Eigen::Vector3d& p : c.points)
+      for (int axis = 0; axis < forceDims_; ++axis, ++k) {
+        PointForce<double> unit;
+        unit.body = c.body;
+        unit.pointIsLocal = true;
+        unit.pointWorld = p;
+        unit.forceWorld = Eigen::Vector3d::Unit(axis);
+        addPointForceGeneralized(*model_, data, unit, dtau.col(k).data());
+      }
   // Every row is slope * tau[d] (+ a constant), except that power also depends on qd[d].
   const double* qd = z + n;
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
@@ -176,6 +228,37 @@ void DynamicsKernel::evaluateWithJacobian(const double* z, double* rows, double*
     rows[r] = rowValue(r, tau, qd);
     J.row(r) = dtau.row(d) * rowSlope(r, qd);
     if (row == Row::Power) J(r, n + d) += tau[d] * std::sqrt(options_.powerWeight);
+  }
+}
+void DynamicsKernel::weightedHessian(const double* z, const double* w, double* hessian) const {
+  // Power rows (tau_d qd_d) are not a weighted sum of tau: differences of the Jacobian.
+  if (options_.powerWeight > 0) {
+    Kernel::weightedHessian(z, w, hessian);
+    return;
+  }
+  const int n = model_->dofCount(), nz = inputs_, k = nonlinearInputs();
+  // sum_r w_r rows_r = sum_d a_d tau_d + constants: every other row is slope * tau[d].
+  std::vector<double> a(n, 0.0);
+  for (size_t r = 0; r < rows_.size(); ++r) a[rows_[r].second] += w[r] * rowSlope(r, z + n);
+  thread_local std::vector<JetChunk> vars, grad, work, adjoint;
+  vars.resize(nz + n);
+  grad.resize(nz);
+  for (int d = 0; d < n; ++d) vars[nz + d] = JetChunk(a[d]);
+  std::fill(hessian, hessian + nz * nz, 0.0);
+  // Forward over reverse: the gradient of phi on Jets seeded on inputs [start, start + width)
+  // carries the Hessian columns of those inputs; the linear inputs' columns follow by symmetry.
+  for (int start = 0; start < k; start += kJetWidth) {
+    const int width = std::min(kJetWidth, k - start);
+    for (int i = 0; i < nz; ++i) {
+      vars[i] = JetChunk(z[i]);
+      if (i >= start && i < start + width) vars[i].v[i - start] = 1.0;
+    }
+    weightedTau_->gradient(vars.data(), JetChunk(0.0), 0, grad.data(), nz, work, adjoint);
+    for (int j = 0; j < nz; ++j)
+      for (int c = 0; c < width; ++c) {
+        hessian[j * nz + start + c] = grad[j].v[c];
+        if (j >= k) hessian[(start + c) * nz + j] = grad[j].v[c];
+      }
   }
 }
 SPACETIME_DEFINE_EVALUATORS(DynamicsKernel)
@@ -222,7 +305,7 @@ BodyRestKernel::BodyRestKernel(std::shared_ptr<const Model<double>> model, int b
 
 template <class T>
 void BodyRestKernel::compute(const T* z, T* rows) const {
-  Data<T> data(*model_);
+  Data<T>& data = scratchData<T>(*model_);
   forwardKinematics(*model_, data, z, z + model_->dofCount(), static_cast<const T*>(nullptr));
   const Vec6<T> v = data.v[body_].vector();
   for (int i = 0; i < 6; ++i) rows[i] = v[i];
@@ -244,9 +327,7 @@ PinKernel::PinKernel(std::shared_ptr<const Model<double>> model, int body,
 
 template <class T>
 void PinKernel::compute(const T* z, T* rows) const {
-  Data<T> data(*model_);
-  forwardKinematics(*model_, data, z);
-  const Vec3<T> p = pointPosition(data, body_, point_);
+  const Vec3<T> p = pointPosition(bodyPose(*model_, z, body_), point_);
   for (size_t i = 0; i < axes_.size(); ++i) rows[i] = p[axes_[i]] - target_[axes_[i]];
 }
 SPACETIME_DEFINE_EVALUATORS(PinKernel)
@@ -264,11 +345,10 @@ ContactAnchorKernel::ContactAnchorKernel(std::shared_ptr<const Model<double>> mo
 
 template <class T>
 void ContactAnchorKernel::compute(const T* z, T* rows) const {
-  Data<T> data(*model_);
-  forwardKinematics(*model_, data, z);
+  const Transform<T> X = bodyPose(*model_, z, contact_.body);
   const T* anchors = z + model_->dofCount();
   for (size_t i = 0; i < contact_.points.size(); ++i) {
-    const Vec3<T> p = pointPosition(data, contact_.body, contact_.points[i]);
+    const Vec3<T> p = pointPosition(X, contact_.points[i]);
     rows[3 * i + 0] = p.x() - anchors[2 * i];
     rows[3 * i + 1] = p.y() - ground_;
     rows[3 * i + 2] = p.z() - anchors[2 * i + 1];
@@ -333,10 +413,11 @@ void ImpactKernel::compute(const T* z, T* rows) const {
   // velocity and no gravity (RBDA eq. 11.58); the configuration is the one before the impact.
   VecX<T> jump(n);
   for (int d = 0; d < n; ++d) jump[d] = qdPlus[d] - qdMinus[d];
-  Data<T> data(*model_);
+  Data<T>& data = scratchData<T>(*model_);
   const T* none = nullptr;
   const VecX<T> impulse =
-      rnea(*model_, data, qMinus, none, jump.data(), contactPointForces(contacts_, z + 4 * n, forceDims_), false);
+      rnea(*model_, data, qMinus, none, jump.data(), contactPointForces(contacts_, z + 4 * n, forceDims_), false,
+           /*allWorldPoses=*/false);
   int r = 0;
   for (int d : unactuated_) rows[r++] = qPlus[d] - qMinus[d];
   for (int d : unactuated_) rows[r++] = impulse[d] * impulseScale_;
@@ -371,9 +452,7 @@ ClearanceKernel::ClearanceKernel(std::shared_ptr<const Model<double>> model, int
 
 template <class T>
 void ClearanceKernel::compute(const T* z, T* rows) const {
-  Data<T> data(*model_);
-  forwardKinematics(*model_, data, z);
-  const Vec3<T> p = pointPosition(data, body_, point_);
+  const Vec3<T> p = pointPosition(bodyPose(*model_, z, body_), point_);
   if (!box_) {
     rows[0] = height_ - p.y();
     return;

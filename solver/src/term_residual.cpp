@@ -1,6 +1,7 @@
 // TermResidual: the chain rule through the linear input map and the augmented-Lagrangian rows.
 #include "solver/term_residual.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace spacetime {
@@ -22,15 +23,23 @@ int InputMap::newRows(int count) {
   return rows_ - count;
 }
 
-Eigen::MatrixXd InputMap::matrix() const { return assemble(&Entry::weight); }
+void SparseMap::apply(const double* p, double* z) const {
+  std::fill(z, z + rows, 0.0);
+  for (const Entry& e : entries) z[e.row] += e.value * p[e.col];
+}
 
-Eigen::MatrixXd InputMap::slopeMatrix() const { return assemble(&Entry::slope); }
+SparseMap InputMap::matrix() const { return assemble(&Entry::weight); }
 
-Eigen::MatrixXd InputMap::assemble(double Entry::*field) const {
+SparseMap InputMap::slopeMatrix() const { return assemble(&Entry::slope); }
+
+SparseMap InputMap::assemble(double Entry::*field) const {
   std::vector<int> offset(sizes_.size() + 1, 0);
   for (size_t i = 0; i < sizes_.size(); ++i) offset[i + 1] = offset[i] + sizes_[i];
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(rows_, offset.back());
-  for (const Entry& e : entries_) B(e.row, offset[e.block] + e.index) += e.*field;
+  SparseMap B;
+  B.rows = rows_;
+  B.cols = offset.back();
+  for (const Entry& e : entries_)
+    if (e.*field != 0) B.entries.push_back({e.row, offset[e.block] + e.index, e.*field});
   return B;
 }
 
@@ -40,6 +49,7 @@ TermResidual::TermResidual(std::shared_ptr<const Kernel> kernel, const InputMap&
       firstMultiplier_(firstMultiplier) {
   set_num_residuals(kernel_->rowCount());
   for (int s : inputs.sizes()) mutable_parameter_block_sizes()->push_back(s);
+  indexColumns(inputs.sizes());
 }
 
 TermResidual::TermResidual(std::shared_ptr<const Kernel> kernel, MovingInputs moving,
@@ -54,6 +64,15 @@ TermResidual::TermResidual(std::shared_ptr<const Kernel> kernel, MovingInputs mo
   set_num_residuals(kernel_->rowCount());
   for (int s : inputs.sizes()) mutable_parameter_block_sizes()->push_back(s);
   mutable_parameter_block_sizes()->push_back(1);
+  indexColumns(inputs.sizes());
+}
+
+void TermResidual::indexColumns(const std::vector<int>& sizes) {
+  for (size_t b = 0; b < sizes.size(); ++b)
+    for (int i = 0; i < sizes[b]; ++i) {
+      colBlock_.push_back(static_cast<int>(b));
+      colIndex_.push_back(i);
+    }
 }
 
 TermResidual::Map TermResidual::map(double const* const* parameters) const {
@@ -67,13 +86,17 @@ TermResidual::Map TermResidual::map(double const* const* parameters) const {
   return m;
 }
 
-Eigen::VectorXd TermResidual::stacked(double const* const* parameters) const {
-  Eigen::VectorXd p(B_.cols());
+void TermResidual::stackInto(double const* const* parameters, double* p) const {
   int k = 0;
   const auto& sizes = parameter_block_sizes();
   const size_t count = sizes.size() - (moving_ ? 1 : 0);
   for (size_t b = 0; b < count; ++b)
     for (int i = 0; i < sizes[b]; ++i) p[k++] = parameters[b][i];
+}
+
+Eigen::VectorXd TermResidual::stacked(double const* const* parameters) const {
+  Eigen::VectorXd p(B_.cols);
+  stackInto(parameters, p.data());
   return p;
 }
 
@@ -86,7 +109,8 @@ void TermResidual::scaleObjective(double scale, double* rows) const {
 
 void TermResidual::rawRows(double const* const* parameters, double* rows) const {
   const Map m = map(parameters);
-  const Eigen::VectorXd z = matrix(m) * stacked(parameters);
+  Eigen::VectorXd z(kernel_->inputSize());
+  matrix(m).apply(stacked(parameters).data(), z.data());
   kernel_->evaluate(z.data(), rows);
   scaleObjective(m.scale, rows);
 }
@@ -98,20 +122,36 @@ std::vector<double> TermResidual::rawRowsNow() const {
 }
 
 Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w) const {
-  const Eigen::VectorXd z = B_ * stacked(blocks_.data());
   const int nz = kernel_->inputSize();
+  Eigen::VectorXd z(nz);
+  B_.apply(stacked(blocks_.data()).data(), z.data());
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Hz(nz, nz);
   kernel_->weightedHessian(z.data(), w, Hz.data());
-  return B_.transpose() * Hz * B_;
+  // B^T Hz B one pair of B's nonzeros at a time: B has a few nonzeros per row and Hz is zero
+  // outside the nonlinear inputs, so this is a fraction of the dense product's work (which was
+  // most of a Newton step's Hessian once the kernels' own Hessians got cheap).
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(B_.cols, B_.cols);
+  for (const SparseMap::Entry& e1 : B_.entries)
+    for (const SparseMap::Entry& e2 : B_.entries) {
+      const double h = Hz(e1.row, e2.row);
+      if (h != 0) H(e1.col, e2.col) += e1.value * h * e2.value;
+    }
+  return H;
 }
 
 bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
                             double** jacobians) const {
+  // Ceres calls this for every residual block of every iteration from its worker threads: the
+  // work vectors are per thread and reused rather than allocated per call.
+  thread_local std::vector<double> p, z, Jz, rowScale, scaleTerm;
   const Map mp = map(parameters);
-  const Eigen::VectorXd p = stacked(parameters);
-  const Eigen::VectorXd z = matrix(mp) * p;
   const int m = kernel_->rowCount(), nz = kernel_->inputSize();
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Jz(m, nz);
+  const SparseMap& B = matrix(mp);
+  p.resize(B.cols);
+  stackInto(parameters, p.data());
+  z.resize(nz);
+  B.apply(p.data(), z.data());
+  Jz.resize(static_cast<size_t>(m) * nz);  // row-major m x nz
   if (jacobians)
     kernel_->evaluateWithJacobian(z.data(), residuals, Jz.data());
   else
@@ -119,19 +159,20 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
 
   // A moving sample's objective rows: sqrt of the quadrature weight, which changes with T.
   const auto& kinds = kernel_->rowKinds();
-  Eigen::VectorXd scaleTerm = Eigen::VectorXd::Zero(m);  // d(scale)/dT * raw objective row
+  scaleTerm.assign(m, 0.0);  // d(scale)/dT * raw objective row
   if (moving_) {
     for (int r = 0; r < m; ++r)
       if (kinds[r] == RowKind::Objective) {
         scaleTerm[r] = mp.scaleSlope * residuals[r];
         residuals[r] *= mp.scale;
-        if (jacobians) Jz.row(r) *= mp.scale;
+        if (jacobians)
+          for (int k = 0; k < nz; ++k) Jz[r * nz + k] *= mp.scale;
       }
   }
 
   // Augmented-Lagrangian transform of each row: scale and (for inactive inequalities) zero.
   const double sr = std::sqrt(al_->rho);
-  Eigen::VectorXd rowScale = Eigen::VectorXd::Ones(m);
+  rowScale.assign(m, 1.0);
   for (int r = 0; r < m; ++r) {
     if (!std::isfinite(residuals[r])) return false;  // Ceres rejects the step
     if (al_->raw) continue;
@@ -154,23 +195,33 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
     }
   }
   if (!jacobians) return true;
-  const Eigen::MatrixXd Jp = rowScale.asDiagonal() * (Jz * matrix(mp));
-  int col = 0;
+  for (double v : Jz)
+    if (!std::isfinite(v)) return false;
   const auto& sizes = parameter_block_sizes();
   const size_t count = sizes.size() - (moving_ ? 1 : 0);
   if (moving_ && jacobians[count]) {  // the event time's column
-    const Eigen::VectorXd dz = mp.slope * p;
-    Eigen::Map<Eigen::VectorXd>(jacobians[count], m) = rowScale.asDiagonal() * (Jz * dz + scaleTerm);
-  }
-  for (size_t b = 0; b < count; ++b) {
-    if (jacobians[b]) {
-      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
-          jacobians[b], m, sizes[b]);
-      J = Jp.middleCols(col, sizes[b]);
+    Eigen::VectorXd dz(nz);
+    mp.slope.apply(p.data(), dz.data());
+    for (int r = 0; r < m; ++r) {
+      double d = scaleTerm[r];
+      for (int k = 0; k < nz; ++k) d += Jz[r * nz + k] * dz[k];
+      jacobians[count][r] = rowScale[r] * d;
     }
-    col += sizes[b];
   }
-  return Jz.allFinite() || !jacobians;
+  // diag(rowScale) Jz B into the blocks, one nonzero of B at a time (rows scaled first).
+  for (int r = 0; r < m; ++r)
+    if (rowScale[r] != 1)
+      for (int k = 0; k < nz; ++k) Jz[r * nz + k] *= rowScale[r];
+  for (size_t b = 0; b < count; ++b)
+    if (jacobians[b]) std::fill(jacobians[b], jacobians[b] + m * sizes[b], 0.0);
+  for (const SparseMap::Entry& e : B.entries) {
+    const int b = colBlock_[e.col], width = sizes[b];
+    if (!jacobians[b]) continue;
+    double* column = jacobians[b] + colIndex_[e.col];
+    const double* zc = Jz.data() + e.row;
+    for (int r = 0; r < m; ++r) column[r * width] += e.value * zc[r * nz];
+  }
+  return true;
 }
 
 }  // namespace spacetime

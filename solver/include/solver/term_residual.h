@@ -39,6 +39,21 @@ struct AugmentedLagrangianState {
   std::vector<double> lambda;  // one per row of every residual (objective rows unused)
 };
 
+// A sparse linear map z = B p, kept as its nonzeros: each input is a few spline basis weights
+// of one degree of freedom (or a single force or anchor), so B is mostly zeros, and products
+// through it as dense matrices (Eigen's GEMM on 6 x 22 times 22 x 30) cost more than the
+// kernels' own arithmetic.
+struct SparseMap {
+  struct Entry {
+    int row, col;
+    double value;
+  };
+  int rows = 0, cols = 0;
+  std::vector<Entry> entries;  // duplicates add up
+  // z = B p (z has `rows` entries, p has `cols`).
+  void apply(const double* p, double* z) const;
+};
+
 // Builds the input map of one residual: which parameter blocks, and B.
 class InputMap {
  public:
@@ -53,8 +68,8 @@ class InputMap {
   int rows() const { return rows_; }
   const std::vector<double*>& blocks() const { return blocks_; }
   const std::vector<int>& sizes() const { return sizes_; }
-  Eigen::MatrixXd matrix() const;
-  Eigen::MatrixXd slopeMatrix() const;
+  SparseMap matrix() const;
+  SparseMap slopeMatrix() const;
 
   // Objective rows are scaled by this factor (and its slope in T): a moving sample's quadrature
   // weight changes with the length of its interval, and objective rows carry sqrt(weight).
@@ -65,7 +80,7 @@ class InputMap {
     int row, block, index;
     double weight, slope;
   };
-  Eigen::MatrixXd assemble(double Entry::*field) const;  // B from one of the entries' fields
+  SparseMap assemble(double Entry::*field) const;  // B from one of the entries' fields
   std::vector<double*> blocks_;
   std::vector<int> sizes_;
   std::vector<Entry> entries_;
@@ -104,19 +119,23 @@ class TermResidual : public ceres::CostFunction {
  private:
   // The map at the given parameters: B, its slope in T, the objective rows' scale and slope.
   struct Map {
-    Eigen::MatrixXd moved, slope;  // B(T) and B'(T) of a moving residual
+    SparseMap moved, slope;  // B(T) and B'(T) of a moving residual
     double scale = 1, scaleSlope = 0;
   };
   // B: the constant map, or a moving residual's B(T).
-  const Eigen::MatrixXd& matrix(const Map& m) const { return moving_ ? m.moved : B_; }
+  const SparseMap& matrix(const Map& m) const { return moving_ ? m.moved : B_; }
   Map map(double const* const* parameters) const;
   Eigen::VectorXd stacked(double const* const* parameters) const;  // p: the blocks but T
+  void stackInto(double const* const* parameters, double* p) const;  // the same into p
+  void indexColumns(const std::vector<int>& sizes);  // fills colBlock_, colIndex_
   // Scales the objective rows of raw kernel rows.
   void scaleObjective(double scale, double* rows) const;
 
   std::shared_ptr<const Kernel> kernel_;
   MovingInputs moving_;
-  Eigen::MatrixXd B_;
+  SparseMap B_;
+  // Column c of B is entry colIndex_[c] of parameter block colBlock_[c].
+  std::vector<int> colBlock_, colIndex_;
   std::vector<double*> blocks_;
   const AugmentedLagrangianState* al_;
   int firstMultiplier_;
