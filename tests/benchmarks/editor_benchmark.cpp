@@ -18,6 +18,8 @@
 //   4 s watch itself.
 #include <benchmark/benchmark.h>
 
+#include <functional>
+
 #include <QApplication>
 #include <QElapsedTimer>
 #include <QtTest>
@@ -81,20 +83,18 @@ void BM_MotionUpdate(benchmark::State& state) {
   }
 }
 
-void BM_PinMoveToMotionOnScreen(benchmark::State& state, const char* scene, const char* pin) {
-  static std::map<std::string, MainWindow*> windows;
-  if (!windows.count(scene)) windows[scene] = solvedWindow(scene);
-  MainWindow* w = windows[scene];
+// Times one edit (alternately in `direction` +1 and -1, so the scene stays put) from the undoable
+// edit to the re-solved motion drawn: the edit, the warm re-solve on the editor's solver thread,
+// and one frame with glFinish.
+void timeEditToMotionOnScreen(benchmark::State& state, MainWindow* w, const QString& name,
+                              const std::function<void(Scene&, double direction)>& change) {
   Document* doc = w->document();
   bool converged = true;
   double direction = 1;
   for (auto _ : state) {
     QElapsedTimer t;
     t.start();
-    doc->edit("Move pin", [&](Scene& s) {
-      for (TermSpec& term : s.terms)
-        if (term.id == pin) term.position.y() += 0.01 * direction;
-    });
+    doc->edit(name, [&](Scene& s) { change(s, direction); });
     w->solve();
     w->solverJob()->waitForFinished(600000);
     w->viewport()->renderFrameAndFinish();
@@ -105,30 +105,24 @@ void BM_PinMoveToMotionOnScreen(benchmark::State& state, const char* scene, cons
   state.counters["converged"] = converged ? 1 : 0;
 }
 
+void BM_PinMoveToMotionOnScreen(benchmark::State& state, const char* scene, const char* pin) {
+  static std::map<std::string, MainWindow*> windows;
+  if (!windows.count(scene)) windows[scene] = solvedWindow(scene);
+  timeEditToMotionOnScreen(state, windows[scene], "Move pin", [&](Scene& s, double direction) {
+    for (TermSpec& term : s.terms)
+      if (term.id == pin) term.position.y() += 0.01 * direction;
+  });
+}
+
 // The Luxo jump's end pose moved 2 cm (alternately further and back) on the solved jump,
 // re-solved warm by the editor's solver thread, until the final motion is drawn.
 void BM_LuxoEndPoseMoveToMotionOnScreen(benchmark::State& state) {
-  MainWindow* w = luxo();
-  Document* doc = w->document();
-  bool converged = true;
-  double direction = 1;
-  for (auto _ : state) {
-    QElapsedTimer t;
-    t.start();
-    doc->edit("Move keyframe", [&](Scene& s) {
-      for (TermSpec& term : s.terms)
-        if (term.id == "end_pose")
-          for (auto& [dof, value] : term.values)
-            if (dof == "base_x") value += 0.02 * direction;
-    });
-    w->solve();
-    w->solverJob()->waitForFinished(600000);
-    w->viewport()->renderFrameAndFinish();
-    state.SetIterationTime(t.nsecsElapsed() * 1e-9);
-    converged = converged && doc->motion() && doc->motion()->converged;
-    direction = -direction;
-  }
-  state.counters["converged"] = converged ? 1 : 0;
+  timeEditToMotionOnScreen(state, luxo(), "Move keyframe", [](Scene& s, double direction) {
+    for (TermSpec& term : s.terms)
+      if (term.id == "end_pose")
+        for (auto& [dof, value] : term.values)
+          if (dof == "base_x") value += 0.02 * direction;
+  });
 }
 
 void BM_EventLoopGapDuringLuxoSolve(benchmark::State& state, WindowMode mode) {
