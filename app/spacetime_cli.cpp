@@ -3,8 +3,11 @@
 //   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--quiet]
 //
 // Writes DIR/summary.json, DIR/motion.json and DIR/<character>.urdf. Progress (iteration,
-// objective, violation) goes to stderr unless --quiet. Bad input exits with status 2 and a
-// one-line reason, before anything is written.
+// objective, violation) goes to stderr unless --quiet. Exit status: 0 converged and every
+// validity check passes; 1 the outputs could not be written; 2 bad input (a one-line reason,
+// before anything is written); 3 the solve did not converge; 4 it converged but the validity
+// report fails - the constraints hold at the samples while the motion is not physical between
+// them (a transcription too coarse for it), which a batch job must not take for a good motion.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -94,5 +97,6 @@ int main(int argc, char** argv) {
   const auto passing = std::count_if(checks.begin(), checks.end(), [](const ValidityCheck& c) { return c.pass; });
   std::fprintf(stderr, "  validity: %zd of %zu checks pass%s\n", static_cast<std::ptrdiff_t>(passing), checks.size(),
                failing.empty() ? "" : ("; failing:" + failing).c_str());
-  return summary.converged ? 0 : 3;
+  if (!summary.converged) return 3;
+  return failing.empty() ? 0 : 4;
 }

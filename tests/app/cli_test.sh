@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # spacetime-cli's contract: a good scene writes summary.json, motion.json and the URDF; bad
-# input exits 2 with one line naming the file and the field, and writes nothing.
+# input exits 2 with one line naming the file and the field, and writes nothing; a motion that
+# converges but fails its validity report exits 4.
 set -u
 cli="$1"
 scenes="$2"
@@ -26,4 +27,16 @@ grep -q "bad.json: field 'characters\[0\].bodies\[0\].mass': value -1" "$tmp/bad
 [ ! -e "$tmp/bad" ] || fail "bad input created the output directory"
 
 "$cli" solve "$scenes/particle.json" 2>/dev/null; [ $? -eq 2 ] || fail "missing --out should exit 2"
+
+# One collocation sample per segment: the Luxo jump converges at its samples (~0.1 s) but its
+# unactuated residual between them is ~60 x weight. That is not a good motion: exit 4, the
+# outputs written with "valid": false.
+sed 's/"samplesPerSegment": 6/"samplesPerSegment": 1/' "$scenes/luxo_jump.json" > "$tmp/coarse.json"
+grep -q '"samplesPerSegment": 1' "$tmp/coarse.json" || fail "could not make the coarse scene"
+"$cli" solve "$tmp/coarse.json" --out "$tmp/coarse" --quiet 2>"$tmp/coarse.err"
+status=$?
+[ "$status" -eq 4 ] || fail "a converged but physically invalid motion exited $status, expected 4: $(cat "$tmp/coarse.err")"
+grep -q '"converged": true' "$tmp/coarse/summary.json" || fail "coarse summary lacks converged: true"
+grep -q '"valid": false' "$tmp/coarse/summary.json" || fail "coarse summary lacks valid: false"
+grep -q "unactuated residual on the dense grid" "$tmp/coarse.err" || fail "the failing check is not named: $(cat "$tmp/coarse.err")"
 echo "1 passed, 0 failed"
