@@ -14,8 +14,10 @@ fi
 echo "no display: solving headless"
 status=0
 ./build/app/spacetime-cli solve resources/scenes/luxo_jump.json --out out/luxo_jump "$@" || status=$?
-# Exit status 3 means the solve stopped without converging; its outputs are still written
-# (summary.json says why). Anything else non-zero is an error.
-if [ "$status" -ne 0 ] && [ "$status" -ne 3 ]; then exit "$status"; fi
+# Exit status 3 means the solve stopped without converging, 4 that it converged but failed a
+# validity check; the outputs are written either way (summary.json says why). Anything else
+# non-zero is an error.
+if [ "$status" -ne 0 ] && [ "$status" -ne 3 ] && [ "$status" -ne 4 ]; then exit "$status"; fi
 [ "$status" -eq 3 ] && echo "warning: the solve did not converge; see out/luxo_jump/summary.json"
+[ "$status" -eq 4 ] && echo "warning: the motion failed a validity check; see out/luxo_jump/summary.json"
 echo "outputs in out/luxo_jump/"
