@@ -1,6 +1,7 @@
 // spacetime-cli: solve a scene headless and write its outputs.
 //
-//   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--quiet]
+//   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S]
+//                       [--quiet] [--no-polish]
 //
 // Writes DIR/summary.json, DIR/motion.json and DIR/<character>.urdf. Progress (iteration,
 // objective, violation) goes to stderr unless --quiet. Exit status: 0 converged and every
@@ -23,7 +24,7 @@ using namespace spacetime;
 namespace {
 
 int usage(const char* why) {
-  std::fprintf(stderr, "spacetime-cli: %s\nusage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--quiet] [--no-polish]\n", why);
+  std::fprintf(stderr, "spacetime-cli: %s\nusage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet] [--no-polish]\n", why);
   return 2;
 }
 
@@ -33,6 +34,10 @@ int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) != "solve") return usage("expected the command 'solve'");
   std::string scenePath, outDir;
   double rate = 1000;
+  // Ceres evaluates residual blocks on `threads` threads (kernels are thread-safe). 2 suits this
+  // 2-core machine; a render farm running one solve per core wants 1.
+  int threads = 2;
+  double maxSeconds = SolverOptions{}.maxSeconds;  // the whole solve's wall-clock budget
   bool quiet = false;
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
   for (int i = 2; i < argc; ++i) {
@@ -42,6 +47,15 @@ int main(int argc, char** argv) {
       char* end = nullptr;
       rate = std::strtod(argv[++i], &end);
       if (!end || *end || !(rate > 0) || rate > 1e5) return usage("--rate must be a number of frames per second in (0, 100000]");
+    } else if (a == "--threads" && i + 1 < argc) {
+      char* end = nullptr;
+      const long n = std::strtol(argv[++i], &end, 10);
+      if (!end || *end || n < 1 || n > 256) return usage("--threads must be a whole number in [1, 256]");
+      threads = static_cast<int>(n);
+    } else if (a == "--max-seconds" && i + 1 < argc) {
+      char* end = nullptr;
+      maxSeconds = std::strtod(argv[++i], &end);
+      if (!end || *end || !(maxSeconds > 0) || maxSeconds > 1e7) return usage("--max-seconds must be a number of seconds in (0, 1e7]");
     } else if (a == "--quiet") quiet = true;
     else if (a == "--no-polish") polish = false;
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
@@ -63,7 +77,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
-  options.threads = 2;  // Ceres evaluates residual blocks in parallel (kernels are thread-safe)
+  options.threads = threads;
+  options.maxSeconds = maxSeconds;
   options.newtonPolish = polish;
   ProgressCallback progress = nullptr;
   if (!quiet)

@@ -1,6 +1,7 @@
 // Augmented-Lagrangian outer loop around Ceres (see augmented_lagrangian.h).
 #include "solver/augmented_lagrangian.h"
 
+#include <sstream>
 #include <ceres/ceres.h>
 
 #include "solver/newton_polish.h"
@@ -251,7 +252,9 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     }
     if (forwarder.timedOut) {
       summary.status = SolveStatus::TimeLimit;
-      summary.reason = "stopped after the time limit of " + std::to_string(options.maxSeconds) + " s";
+      std::ostringstream limit;  // 0.5, 300: not std::to_string's 0.500000
+      limit << options.maxSeconds;
+      summary.reason = "stopped after the time limit of " + limit.str() + " s; the last accepted iterate is kept";
       break;
     }
     const std::vector<std::vector<double>> rows = rawRows(problem);

@@ -28,6 +28,20 @@ grep -q "bad.json: field 'characters\[0\].bodies\[0\].mass': value -1" "$tmp/bad
 
 "$cli" solve "$scenes/particle.json" 2>/dev/null; [ $? -eq 2 ] || fail "missing --out should exit 2"
 
+# --threads and --max-seconds: a one-thread solve works; a budget too short for the Luxo jump stops
+# it with exit 3, the outputs written and the reason naming the limit; nonsense is bad input.
+"$cli" solve "$scenes/particle.json" --out "$tmp/one" --threads 1 --quiet 2>/dev/null || fail "--threads 1 exited $?"
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/limited" --max-seconds 0.02 --quiet 2>/dev/null
+status=$?
+[ "$status" -eq 3 ] || fail "a solve past --max-seconds exited $status, expected 3"
+grep -q '"reason": "stopped after the time limit of 0.02 s' "$tmp/limited/summary.json" || fail "the time limit is not the reason: $(grep reason "$tmp/limited/summary.json")"
+for bad in "--threads 0" "--threads x" "--max-seconds -1"; do
+  "$cli" solve "$scenes/particle.json" --out "$tmp/bad_option" $bad 2>/dev/null
+  status=$?
+  [ "$status" -eq 2 ] || fail "$bad exited $status, expected 2"
+  [ ! -e "$tmp/bad_option" ] || fail "$bad created the output directory"
+done
+
 # One collocation sample per segment: the Luxo jump converges at its samples (~0.1 s) but its
 # unactuated residual between them is ~60 x weight. That is not a good motion: exit 4, the
 # outputs written with "valid": false.
