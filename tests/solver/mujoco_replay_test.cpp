@@ -5,7 +5,8 @@
 // What is left must be motion.json's tau, every dof (the same dynamics, read by another library
 // from our files), and its unactuated entries - force from nowhere on the floating base - must
 // stay within the validity report's 1 % of the character's weight at every frame: MuJoCo's own
-// verdict that the motion is physical, between the collocation samples too.
+// verdict that the motion is physical, between the collocation samples too. Then MuJoCo
+// simulates the flight forward under the file's actuated torques and must follow the file's q.
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
@@ -29,6 +30,11 @@ struct Replay {
   double worstUnactuatedTime = 0;
   int frames = 0;
   int contactFrames = 0;  // frames where some contact force acts
+  // The longest stretch of frames without ground force (the flight), simulated forward by
+  // MuJoCo (RK4, the frames' step) from its first frame's state under the file's actuated
+  // torques alone: the largest |q_sim - q_file| over it (metres or radians).
+  double flightStart = 0, flightEnd = 0;
+  double worstFlightError = 0;
 };
 
 // Replays DIR/motion.json's first character through MuJoCo on DIR/<its urdf>.
@@ -66,6 +72,7 @@ Replay replayInMujoco(const std::string& dir) {
   const double weight = mj_getTotalmass(m) * g;
   const json &times = c.at("times"), &q = c.at("q"), &qd = c.at("qd"), &qdd = c.at("qdd"), &tau = c.at("tau");
   std::vector<mjtNum> pushed(m->nv);
+  std::vector<bool> grounded;
   for (size_t f = 0; f < times.size(); ++f) {
     for (size_t k = 0; k < dofs.size(); ++k) {
       d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] = q[f][k].get<double>();
@@ -87,6 +94,7 @@ Replay replayInMujoco(const std::string& dir) {
       mj_applyFT(m, d, force, torque, point, contactBody[j], pushed.data());
     }
     out.contactFrames += anyForce;
+    grounded.push_back(anyForce);
     double scale = 1;
     for (size_t k = 0; k < dofs.size(); ++k) scale = std::max(scale, 1 + std::abs(tau[f][k].get<double>()));
     for (size_t k = 0; k < dofs.size(); ++k) {
@@ -99,6 +107,41 @@ Replay replayInMujoco(const std::string& dir) {
       }
     }
     ++out.frames;
+  }
+  // The flight: the longest run of frames without ground force.
+  size_t first = 0, last = 0;
+  for (size_t a = 0; a < grounded.size();) {
+    size_t b = a;
+    while (b < grounded.size() && !grounded[b]) ++b;
+    if (b > a && b - a > last - first) first = a, last = b - 1;
+    a = b + 1;
+  }
+  if (last > first) {
+    out.flightStart = times[first].get<double>();
+    out.flightEnd = times[last].get<double>();
+    // Each frame's step in kSubsteps RK4 steps, each under the torque linearly interpolated to
+    // its midpoint: RK4 holds qfrc_applied constant over a step, and the flight is sensitive to
+    // it (one 1 ms step per frame under the frame's torque: 0.12 rad off by the landing).
+    constexpr int kSubsteps = 4;
+    m->opt.timestep = (times[first + 1].get<double>() - times[first].get<double>()) / kSubsteps;
+    m->opt.integrator = mjINT_RK4;
+    mj_resetData(m, d);
+    for (size_t k = 0; k < dofs.size(); ++k) {
+      d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] = q[first][k].get<double>();
+      d->qvel[adr[k]] = qd[first][k].get<double>();
+    }
+    for (size_t f = first; f < last; ++f) {
+      for (int sub = 0; sub < kSubsteps; ++sub) {
+        const double a = (sub + 0.5) / kSubsteps;
+        for (size_t k = 0; k < dofs.size(); ++k)
+          d->qfrc_applied[adr[k]] =
+              actuated[k] ? (1 - a) * tau[f][k].get<double>() + a * tau[f + 1][k].get<double>() : 0.0;
+        mj_step(m, d);
+      }
+      for (size_t k = 0; k < dofs.size(); ++k)
+        out.worstFlightError = std::max(
+            out.worstFlightError, std::abs(d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] - q[f + 1][k].get<double>()));
+    }
   }
   mj_deleteData(d);
   mj_deleteModel(m);
@@ -126,9 +169,13 @@ TEST_P(MujocoReplay, SolvedMotionFilesReplayInMujoco) {
   EXPECT_GT(r.contactFrames, r.frames / 2);  // the take-off and the landing, two thirds of the clip
   EXPECT_LT(r.worstMismatch, 1e-9);
   EXPECT_LE(r.worstUnactuated, 0.01) << "at t = " << r.worstUnactuatedTime;
+  EXPECT_NEAR(r.flightStart, 0.4, 0.002);
+  EXPECT_NEAR(r.flightEnd, 0.8, 0.002);
+  EXPECT_LE(r.worstFlightError, 0.01);  // the validity report's limit for its own (ABA) simulation
   std::printf("%s in MuJoCo: %d frames (%d with ground forces), tau agrees to %.2g relative, unactuated force "
-              "at most %.4f x weight (t = %.3f s)\n",
-              GetParam(), r.frames, r.contactFrames, r.worstMismatch, r.worstUnactuated, r.worstUnactuatedTime);
+              "at most %.4f x weight (t = %.3f s); flight %.3f-%.3f s simulated by MuJoCo's RK4 within %.2g\n",
+              GetParam(), r.frames, r.contactFrames, r.worstMismatch, r.worstUnactuated, r.worstUnactuatedTime,
+              r.flightStart, r.flightEnd, r.worstFlightError);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, MujocoReplay, ::testing::Values("luxo_jump.json", "luxo_3d.json"),
