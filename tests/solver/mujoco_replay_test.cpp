@@ -171,7 +171,10 @@ TEST_P(MujocoReplay, SolvedMotionFilesReplayInMujoco) {
   EXPECT_LE(r.worstUnactuated, 0.01) << "at t = " << r.worstUnactuatedTime;
   EXPECT_NEAR(r.flightStart, 0.4, 0.002);
   EXPECT_NEAR(r.flightEnd, 0.8, 0.002);
-  EXPECT_LE(r.worstFlightError, 0.01);  // the validity report's limit for its own (ABA) simulation
+  // The validity report's limit for its own simulation (ABA on the spline's continuous torque:
+  // 1.5e-4 on the jump). From the file's 1 ms frames MuJoCo follows within 0.003-0.004, the
+  // torque's sampling: written at 4 kHz the same replay stays within 1.9e-4 and 2.4e-4.
+  EXPECT_LE(r.worstFlightError, 0.01);
   std::printf("%s in MuJoCo: %d frames (%d with ground forces), tau agrees to %.2g relative, unactuated force "
               "at most %.4f x weight (t = %.3f s); flight %.3f-%.3f s simulated by MuJoCo's RK4 within %.2g\n",
               GetParam(), r.frames, r.contactFrames, r.worstMismatch, r.worstUnactuated, r.worstUnactuatedTime,
