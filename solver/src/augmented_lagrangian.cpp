@@ -1,13 +1,13 @@
 // Augmented-Lagrangian outer loop around Ceres (see augmented_lagrangian.h).
 #include "solver/augmented_lagrangian.h"
 
-#include <sstream>
 #include <ceres/ceres.h>
-
-#include "solver/newton_polish.h"
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
+
+#include "solver/newton_polish.h"
 
 namespace spacetime {
 namespace {
