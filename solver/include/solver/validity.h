@@ -1,7 +1,8 @@
 // The validity report: is a solved motion physically valid between the samples too?
 //
 // A collocation transcription can look converged while the motion between samples is
-// unphysical, so the report judges on a grid `denseFactor` times denser than the samples:
+// unphysical, so the report judges on a grid `denseFactor` times denser than the samples (and
+// ten times finer again next to every contact's start and end, where the ground force switches):
 // the largest unactuated generalized force (as a fraction of the character's weight), pin
 // errors, contact slip and penetration, contact forces' sign and friction, clearance, rest at
 // the rest terms, and - the independent check - the error of forward-simulating the solved
@@ -54,7 +55,7 @@ struct FormulaCheck {
 struct ValidityReport {
   int denseFactor = 10;
   double maxUnactuatedResidualSamples = 0;  // fraction of weight, at the collocation samples
-  double maxUnactuatedResidualDense = 0;    // fraction of weight, on the dense grid
+  double maxUnactuatedResidualDense = 0;    // fraction of weight, on the dense grid (+ contact edges)
   double worstDenseTime = 0;
   double maxPinError = 0;                   // m
   double maxContactSlip = 0;                // m, horizontal distance from the anchor
