@@ -23,14 +23,36 @@ using namespace spacetime;
 
 namespace {
 
+#define SPACETIME_CLI_USAGE \
+  "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet] [--no-polish]\n"
+
+constexpr const char* kHelp =
+    SPACETIME_CLI_USAGE
+    "\n"
+    "Solves a Spacetime scene headless and writes DIR/summary.json, DIR/motion.json, one URDF and\n"
+    "one BVH per character and DIR/motion.glb.\n"
+    "  --rate HZ          frames per second of motion.json, BVH and glTF (default 1000)\n"
+    "  --threads N        Ceres evaluation threads (default 2)\n"
+    "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
+    "  --quiet            no progress on stderr\n"
+    "  --no-polish        the augmented Lagrangian without the Newton polish\n"
+    "Exit status: 0 converged and valid; 1 outputs not written; 2 bad input or options (nothing\n"
+    "written); 3 not converged or out of time (outputs written); 4 converged but the validity\n"
+    "report fails (outputs written).\n";
+
 int usage(const char* why) {
-  std::fprintf(stderr, "spacetime-cli: %s\nusage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet] [--no-polish]\n", why);
+  std::fprintf(stderr, "spacetime-cli: %s\n" SPACETIME_CLI_USAGE, why);
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
+      std::fputs(kHelp, stdout);
+      return 0;
+    }
   if (argc < 2 || std::string(argv[1]) != "solve") return usage("expected the command 'solve'");
   std::string scenePath, outDir;
   double rate = 1000;

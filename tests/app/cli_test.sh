@@ -27,6 +27,8 @@ grep -q "bad.json: field 'characters\[0\].bodies\[0\].mass': value -1" "$tmp/bad
 [ ! -e "$tmp/bad" ] || fail "bad input created the output directory"
 
 "$cli" solve "$scenes/particle.json" 2>/dev/null; [ $? -eq 2 ] || fail "missing --out should exit 2"
+"$cli" --help > "$tmp/help.txt" || fail "--help exited $?"
+grep -q "Exit status" "$tmp/help.txt" || fail "--help does not explain the exit statuses"
 
 # --threads and --max-seconds: a one-thread solve works; a budget too short for the Luxo jump stops
 # it with exit 3, the outputs written and the reason naming the limit; nonsense is bad input.
