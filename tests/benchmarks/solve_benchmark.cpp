@@ -15,7 +15,7 @@
 namespace spacetime {
 namespace {
 
-// With samplesPerSegment > 0 the scene's transcription is overridden (2: the coarse preview,
+// With samplesPerSegment > 0 the scene's transcription is overridden (2: a coarser transcription,
 // which converges but fails the dense-grid check); polish = false runs the augmented Lagrangian
 // without its Newton polish, to measure what the polish saves; threads = 2 is what spacetime-cli
 // uses on this 2-core machine (the other rows are single-threaded, as the editor's solver).
