@@ -7,6 +7,7 @@
 #include <fstream>
 #include <random>
 
+#include "../mujoco_dofs.h"
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
@@ -33,13 +34,7 @@ double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d&
   for (int k = 0; k < 3; ++k) m->opt.gravity[k] = gravity[k];
   mjData* d = mj_makeData(m);
   EXPECT_EQ(m->nv, model.dofCount());
-  // MuJoCo's dof addresses of our dofs, by joint name.
-  std::vector<int> adr;
-  for (const std::string& name : model.dofNames()) {
-    const int j = mj_name2id(m, mjOBJ_JOINT, name.c_str());
-    EXPECT_GE(j, 0) << name;
-    adr.push_back(j >= 0 ? m->jnt_dofadr[j] : 0);
-  }
+  const testing::MujocoDofs adr = testing::mujocoDofs(m, model.dofNames());
   std::mt19937 rng(seed);
   Data<double> data(model);
   double worst = 0;
@@ -48,14 +43,14 @@ double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d&
     const Eigen::VectorXd q = testing::randomVector(rng, n, 1.5), qd = testing::randomVector(rng, n, 2),
                           qdd = testing::randomVector(rng, n, 3);
     for (int k = 0; k < n; ++k) {
-      d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] = q[k];
-      d->qvel[adr[k]] = qd[k];
-      d->qacc[adr[k]] = qdd[k];
+      d->qpos[adr.pos[k]] = q[k];
+      d->qvel[adr.vel[k]] = qd[k];
+      d->qacc[adr.vel[k]] = qdd[k];
     }
     mj_inverse(m, d);
     const Eigen::VectorXd tau = rnea(model, data, q.data(), qd.data(), qdd.data());
     for (int k = 0; k < n; ++k)
-      worst = std::max(worst, std::abs(d->qfrc_inverse[adr[k]] - tau[k]) / (1 + tau.cwiseAbs().maxCoeff()));
+      worst = std::max(worst, std::abs(d->qfrc_inverse[adr.vel[k]] - tau[k]) / (1 + tau.cwiseAbs().maxCoeff()));
   }
   mj_deleteData(d);
   mj_deleteModel(m);

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "../mujoco_dofs.h"
 #include "../shipped_scene.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/outputs.h"
@@ -57,12 +58,7 @@ Replay replayInMujoco(const std::string& dir) {
   const std::vector<std::string> dofs = c.at("dofs").get<std::vector<std::string>>();
   const std::vector<bool> actuated = c.at("actuated").get<std::vector<bool>>();
   EXPECT_EQ(m->nv, static_cast<int>(dofs.size()));
-  std::vector<int> adr;
-  for (const std::string& name : dofs) {
-    const int j = mj_name2id(m, mjOBJ_JOINT, name.c_str());
-    EXPECT_GE(j, 0) << name;
-    adr.push_back(j >= 0 ? m->jnt_dofadr[j] : 0);
-  }
+  const testing::MujocoDofs adr = testing::mujocoDofs(m, dofs);
   std::vector<int> contactBody;
   for (const json& ct : c.at("contacts")) {
     contactBody.push_back(mj_name2id(m, mjOBJ_BODY, ct.at("link").get<std::string>().c_str()));
@@ -75,9 +71,9 @@ Replay replayInMujoco(const std::string& dir) {
   std::vector<bool> grounded;
   for (size_t f = 0; f < times.size(); ++f) {
     for (size_t k = 0; k < dofs.size(); ++k) {
-      d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] = q[f][k].get<double>();
-      d->qvel[adr[k]] = qd[f][k].get<double>();
-      d->qacc[adr[k]] = qdd[f][k].get<double>();
+      d->qpos[adr.pos[k]] = q[f][k].get<double>();
+      d->qvel[adr.vel[k]] = qd[f][k].get<double>();
+      d->qacc[adr.vel[k]] = qdd[f][k].get<double>();
     }
     mj_inverse(m, d);
     std::fill(pushed.begin(), pushed.end(), 0.0);
@@ -99,7 +95,7 @@ Replay replayInMujoco(const std::string& dir) {
     for (size_t k = 0; k < dofs.size(); ++k) scale = std::max(scale, 1 + std::abs(tau[f][k].get<double>()));
     for (size_t k = 0; k < dofs.size(); ++k) {
       // mj_inverse gives the total force the motion needs; the ground supplies J^T f of it.
-      const double needed = d->qfrc_inverse[adr[k]] - pushed[adr[k]];
+      const double needed = d->qfrc_inverse[adr.vel[k]] - pushed[adr.vel[k]];
       out.worstMismatch = std::max(out.worstMismatch, std::abs(needed - tau[f][k].get<double>()) / scale);
       if (!actuated[k] && std::abs(needed) / weight > out.worstUnactuated) {
         out.worstUnactuated = std::abs(needed) / weight;
@@ -127,20 +123,20 @@ Replay replayInMujoco(const std::string& dir) {
     m->opt.integrator = mjINT_RK4;
     mj_resetData(m, d);
     for (size_t k = 0; k < dofs.size(); ++k) {
-      d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] = q[first][k].get<double>();
-      d->qvel[adr[k]] = qd[first][k].get<double>();
+      d->qpos[adr.pos[k]] = q[first][k].get<double>();
+      d->qvel[adr.vel[k]] = qd[first][k].get<double>();
     }
     for (size_t f = first; f < last; ++f) {
       for (int sub = 0; sub < kSubsteps; ++sub) {
         const double a = (sub + 0.5) / kSubsteps;
         for (size_t k = 0; k < dofs.size(); ++k)
-          d->qfrc_applied[adr[k]] =
+          d->qfrc_applied[adr.vel[k]] =
               actuated[k] ? (1 - a) * tau[f][k].get<double>() + a * tau[f + 1][k].get<double>() : 0.0;
         mj_step(m, d);
       }
       for (size_t k = 0; k < dofs.size(); ++k)
         out.worstFlightError = std::max(
-            out.worstFlightError, std::abs(d->qpos[m->jnt_qposadr[m->dof_jntid[adr[k]]]] - q[f + 1][k].get<double>()));
+            out.worstFlightError, std::abs(d->qpos[adr.pos[k]] - q[f + 1][k].get<double>()));
     }
   }
   mj_deleteData(d);
