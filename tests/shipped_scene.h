@@ -15,4 +15,11 @@ inline Scene shippedScene(const std::string& name) {
   return *r.scene;
 }
 
+// Loads a scene kept for tests only (tests/scenes/).
+inline Scene testScene(const std::string& name) {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/tests/scenes/" + name);
+  if (!r.scene) throw std::runtime_error(r.error);
+  return *r.scene;
+}
+
 }  // namespace spacetime::testing

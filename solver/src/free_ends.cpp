@@ -26,7 +26,7 @@ TimeRef SpacetimeProblem::timeRef(int c, double t) const {
   TimeRef r;
   r.time = t;
   const DofGroup* g = rootGroup(c);
-  const int k = g ? hermiteInterval(c, *g, t, false) : -1;
+  const int k = g ? hermiteInterval(c, *g, t, Side::Contacts) : -1;
   for (size_t i = 0; i < freeEnds_.size(); ++i) {
     const FreeEnd& e = freeEnds_[i];
     if (t < e.left - kTimeTolerance || t > e.right + kTimeTolerance) continue;

@@ -129,7 +129,7 @@ void SpacetimeProblem::settleHeldStances() {
       }
       for (size_t k = 0; k < g.heldInterval.size(); ++k)
         if (g.heldInterval[k])
-          std::fill_n(x_.begin() + g.bubbleOffset + k * g.bubbleBlockSize(), g.bubbleBlockSize(), 0.0);
+          std::fill_n(x_.begin() + g.bubbleStart(static_cast<int>(k)), g.bubbleBlockSize(static_cast<int>(k)), 0.0);
     }
 }
 

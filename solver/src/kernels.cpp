@@ -356,6 +356,30 @@ void ContactAnchorKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(ContactAnchorKernel)
 
+// --- ContactPointMotionKernel ------------------------------------------------------------
+
+ContactPointMotionKernel::ContactPointMotionKernel(std::shared_ptr<const Model<double>> model,
+                                                   const ContactPoints& contact, int forceDims,
+                                                   int order, std::string label)
+    : model_(std::move(model)), contact_(contact), forceDims_(forceDims), order_(order) {
+  label_ = std::move(label);
+  inputs_ = (order_ + 1) * model_->dofCount();
+  kinds_.assign(forceDims_ * contact_.points.size(), RowKind::Equality);
+}
+
+template <class T>
+void ContactPointMotionKernel::compute(const T* z, T* rows) const {
+  const int n = model_->dofCount();
+  Data<T>& data = scratchData<T>(*model_);
+  forwardKinematics(*model_, data, z, z + n, order_ == 2 ? z + 2 * n : static_cast<const T*>(nullptr));
+  int r = 0;
+  for (const Eigen::Vector3d& p : contact_.points) {
+    const Vec3<T> v = order_ == 2 ? pointAcceleration(data, contact_.body, p) : pointVelocity(data, contact_.body, p);
+    for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(ContactPointMotionKernel)
+
 // --- FrictionConeKernel ------------------------------------------------------------------
 
 FrictionConeKernel::FrictionConeKernel(int points, int forceDims, double mu, double weightScale,

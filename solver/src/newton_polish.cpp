@@ -309,6 +309,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     }
     if (it >= options.maxIterations) return giveUp(outOfSteps);
     if (cancel && cancel->load()) return giveUp("cancelled");
+    if (Clock::now() > options.deadline) return giveUp("out of time");
 
     // W = J_r^T J_r + curvature of the objective rows (weights r) and of the held constraints
     // (weights y), the Hessian of the Lagrangian 1/2 |r|^2 + y.c_A.

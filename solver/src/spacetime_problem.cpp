@@ -35,6 +35,19 @@ std::vector<double> intervalTimes(const Transcription& tr, double a, double b, b
   return times;
 }
 
+constexpr int kBoxClearanceDensity = 10;  // instants per sample gap where a box clearance holds
+
+// `times` with factor - 1 evenly spaced instants added between each consecutive pair.
+std::vector<double> densified(const std::vector<double>& times, int factor) {
+  std::vector<double> out;
+  for (size_t i = 0; i < times.size(); ++i) {
+    out.push_back(times[i]);
+    if (i + 1 < times.size())
+      for (int k = 1; k < factor; ++k) out.push_back(times[i] + (times[i + 1] - times[i]) * k / factor);
+  }
+  return out;
+}
+
 // The order-th derivative in u of the root's bubble j, 16 u^2 (1-u)^2 (2u-1)^j (1 at the
 // middle for j = 0; zero with its slope at both ends).
 double bubble(int j, double u, int order) {
@@ -110,26 +123,26 @@ std::vector<std::pair<double, double>> SpacetimeProblem::flightPhases(int c) con
 }
 
 GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order,
-                                        bool before) const {
+                                        Side side) const {
   if (!g.hermite) {
     const BSplineBasis b = g.spline.basis(t);
     return splineBasis(g, b, b.derivative(order));
   }
-  const int k = hermiteInterval(c, g, t, before);
+  const int k = hermiteInterval(c, g, t, side);
   return hermiteBasis(g, k, g.breaks[k], g.breaks[k + 1], t, order, 0, 0, 0, nullptr);
 }
 
-int SpacetimeProblem::hermiteInterval(int c, const DofGroup& g, double t, bool before) const {
+int SpacetimeProblem::hermiteInterval(int c, const DofGroup& g, double t, Side side) const {
   const auto& br = g.breaks;
   int k = static_cast<int>(std::upper_bound(br.begin(), br.end(), t) - br.begin()) - 1;
   k = std::clamp(k, 0, static_cast<int>(br.size()) - 2);
-  if (before)  // the interval that ends at t: the last one starting before t
+  if (side == Side::Before)  // the interval that ends at t: the last one starting before t
     k = std::clamp(static_cast<int>(std::lower_bound(br.begin(), br.end(), t - kTimeTolerance) -
                                     br.begin()) - 1,
                    0, static_cast<int>(br.size()) - 2);
   // At an interior breakpoint, take the interval on the side that has t's contacts. (An impact
   // repeats its breakpoint; upper_bound already lands after the repeat, on the contact side.)
-  else if (k > 0 && std::abs(t - br[k]) < 1e-9 &&
+  else if (side == Side::Contacts && k > 0 && std::abs(t - br[k]) < 1e-9 &&
       activeContacts(c, 0.5 * (br[k - 1] + br[k])) == activeContacts(c, t) &&
       activeContacts(c, 0.5 * (br[k] + br[k + 1])) != activeContacts(c, t))
     --k;
@@ -171,9 +184,9 @@ GroupBasis SpacetimeProblem::hermiteBasis(const DofGroup& g, int k, double a, do
     power[i] = (i % 2 == 1 ? 1 : 0) - order;
     shape[i] = w[i];
   }
-  for (int j = 0; j < g.bubbles; ++j) {
-    gb.start[gb.count] = g.bubbleOffset + k * g.bubbleBlockSize();
-    gb.size[gb.count] = g.bubbleBlockSize();
+  for (int j = 0; j < g.bubblesIn(k); ++j) {
+    gb.start[gb.count] = g.bubbleStart(k);
+    gb.size[gb.count] = g.bubbleBlockSize(k);
     gb.index[gb.count] = j * n;
     power[gb.count] = -order;
     shape[gb.count] = bubble(j, u, order);
@@ -218,13 +231,13 @@ GroupBasis SpacetimeProblem::groupBasisAt(int c, const DofGroup& g, const TimeRe
                       e.rate(r.intervalStart, r.eventTime), e.rate(r.intervalEnd, r.eventTime), slope);
 }
 
-void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order, bool before) {
+void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order, Side side) {
   const CharacterVariables& cv = characters_[c];
   const int row0 = in.newRows(cv.dofs);
   for (const DofGroup& g : cv.groups) {
     const int n = static_cast<int>(g.dofs.size());
     if (n == 0) continue;  // Ceres has no zero-size parameter blocks
-    const GroupBasis gb = groupBasis(c, g, t, order, before);
+    const GroupBasis gb = groupBasis(c, g, t, order, side);
     for (int i = 0; i < gb.count; ++i) {
       const int blk = in.block(x_.data() + gb.start[i], gb.size[i]);
       for (int k = 0; k < n; ++k) in.add(row0 + g.dofs[k], blk, gb.index[i] + k, gb.weight[i]);
@@ -234,7 +247,7 @@ void SpacetimeProblem::addMotionInputs(InputMap& in, int c, double t, int order,
 
 void SpacetimeProblem::addMotionInputs(InputMap& in, int c, const TimeRef& r, double T, int order) {
   if (r.event < 0) {
-    addMotionInputs(in, c, r.time, order);
+    addMotionInputs(in, c, r.time, order, r.rootSide);
     return;
   }
   const CharacterVariables& cv = characters_[c];
@@ -341,11 +354,14 @@ void SpacetimeProblem::addResidualAt(std::shared_ptr<const Kernel> kernel, int e
   residuals_.push_back(residual);
 }
 
-SpacetimeProblem::SampleInputs SpacetimeProblem::sampleInputs(int c, double t) const {
+SpacetimeProblem::SampleInputs SpacetimeProblem::sampleInputs(int c, double t, bool after) const {
   SampleInputs s;
   s.character = c;
   s.ref = timeRef(c, t);
-  s.active = activeContacts(c, t);
+  // The first instant of a flight (Sample::after): the interval that starts at t, without the
+  // contacts that end at t.
+  if (after) s.ref.rootSide = Side::After;
+  s.active = activeContacts(c, after ? t + 1e-6 : t);
   for (int j : s.active) s.forces.push_back(contacts_[j].interpolation(t));
   return s;
 }
@@ -389,11 +405,17 @@ bool SpacetimeProblem::assemble(std::string* error) {
           unactuated.breaks.insert(
               std::lower_bound(unactuated.breaks.begin(), unactuated.breaks.end(), t.start - kTimeTolerance),
               t.start);
+      unactuated.extraBubble.assign(unactuated.breaks.size() - 1, 0);
+      for (size_t k = 0; k + 1 < unactuated.breaks.size(); ++k)
+        if (unactuated.breaks[k + 1] - unactuated.breaks[k] > kTimeTolerance)
+          for (double f : transcription_.flightStarts)
+            if (std::abs(f - unactuated.breaks[k]) < kTimeTolerance) unactuated.extraBubble[k] = 1;
       cv.groups.push_back(unactuated);
     }
     for (DofGroup& g : cv.groups) {
       g.offset = size;
       g.bubbleOffset = size + g.blockSize() * g.blockCount();
+      if (g.hermite) g.layoutBubbles();
       size += g.variableCount();
     }
     characters_.push_back(cv);
@@ -451,7 +473,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
       o.effortWeight = obj.effort * s.weight;
       o.powerWeight = obj.power * s.weight;
       o.weightScale = 1.0 / cv.weight;
-      const SampleInputs si = sampleInputs(ci, s.time);
+      const SampleInputs si = sampleInputs(ci, s.time, s.after);
       const TimeRef r = si.ref;
       std::vector<ContactPoints> cps;
       for (int j : si.active) cps.push_back(contacts_[j].points);
@@ -523,7 +545,13 @@ bool SpacetimeProblem::assemble(std::string* error) {
       case TermKind::Clearance:
         if (!checkOutsideWindows(t.start, label, error) || !checkOutsideWindows(t.end, label, error))
           return false;
-        for (double time : intervalTimes(transcription_, t.start, t.end)) {
+        // Outside-a-box is not convex: held at the samples only, a path cut the box's corner by
+        // 8 mm between them (ParticleClearance.PassesOverABox, 40 control points per second).
+        // Box clearances are therefore also imposed at kBoxClearanceDensity - 1 instants between
+        // consecutive samples (0.4 mm). Height clearances stay at the samples: a smooth path over a
+        // flat bound dips 3e-5 m between them (luxo_hurdle), and the extra rows slowed every Luxo
+        // scene (luxo_jump: 600 instead of 360 iterations with the ground clearances densified).
+        for (double time : densified(intervalTimes(transcription_, t.start, t.end), t.box ? kBoxClearanceDensity : 1)) {
           const int body = cv.model->bodyIndex(t.body);
           addAt(t.box ? std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.boxMin, t.boxMax,
                                                           at(label, time))
@@ -544,8 +572,34 @@ bool SpacetimeProblem::assemble(std::string* error) {
     if (!checkOutsideWindows(ct.start, label, error) ||
         !checkOutsideWindows(ct.end, label, error))
       return false;
-    // A held stance's anchor rows are the same at every sample: once is enough.
-    for (double time : ct.holdsRoot ? std::vector<double>{ct.times.front()} : ct.times) {
+    // A contact that does not hold the root (its points on another body, or too few to fix the
+    // root) keeps its points still by their motion: anchored at the contact's first instant, at
+    // rest there (a touch-down's impact already says so), and without acceleration at every
+    // collocation sample - the same collocation that makes the flight obey the dynamics, with as
+    // many conditions as the root polynomial has free coefficients. Anchors at every sample
+    // instead fix positions only, and a 1e-5 m anchor violation buys a large root acceleration
+    // at a sample: the lamp rooted at its head (contacts on its base, a leaf) stopped after 100
+    // multiplier updates at objective 66 (docs/STATUS.md, session 15); now it converges to the
+    // base-rooted jump. Free lift-offs keep the anchors (their samples move with the end).
+    const bool stillByAcceleration = !ct.holdsRoot && ct.freeEnd < 0;
+    if (stillByAcceleration) {
+      // The points' velocity (order 1) or acceleration (order 2) is zero at `time`.
+      auto addPointMotion = [&](int order, double time, const std::string& what) {
+        const int c = ct.character;
+        const TimeRef r = timeRef(c, time);
+        addResidualAt(std::make_shared<ContactPointMotionKernel>(cv.model, ct.points, ct.forceDims, order,
+                                                                 at(label + " " + what, time)),
+                      r.event, [this, c, r, order](InputMap& in, double T) {
+                        for (int o = 0; o <= order; ++o) addMotionInputs(in, c, r, T, o);
+                      });
+      };
+      if (!ct.impact()) addPointMotion(1, ct.times.front(), "at rest");
+      for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end))
+        if (smp.weight > 0 && !smp.after && !smp.stance) addPointMotion(2, smp.time, "still");  // collocation nodes
+    }
+    // A held stance's anchor rows are the same at every sample, and a contact kept still by its
+    // motion is anchored at its start: once is enough.
+    for (double time : ct.holdsRoot || stillByAcceleration ? std::vector<double>{ct.times.front()} : ct.times) {
       const TimeRef r = timeRef(ct.character, time);
       const int c = ct.character;
       addResidualAt(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, scene_.groundHeight,
@@ -564,7 +618,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     // with 2 threads 3292 -> 1907 iterations; single-threaded jump 15.2 -> 15.4 s, heavy
     // 14.4 -> 11.4 s, hurdle 12.9 -> 25.0 s.
     for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end)) {
-      if (obj.contactForce <= 0 || smp.weight <= 0) continue;
+      if (obj.contactForce <= 0 || smp.weight <= 0 || smp.after) continue;
       const TimeRef r = timeRef(ct.character, smp.time);
       const std::pair<int, double> force = ct.interpolation(smp.time);
       const double scale = 1.0 / cv.weight;  // as fractions of the weight
@@ -650,9 +704,9 @@ void SpacetimeProblem::addImpactTerms(int j) {
   // One velocity jump for every contact touching down now: the first of them adds it.
   if (group.front() == j) {
     InputMap in;
-    addMotionInputs(in, ct.character, t, 0, /*before=*/true);
+    addMotionInputs(in, ct.character, t, 0, Side::Before);
     addMotionInputs(in, ct.character, t, 0);
-    addMotionInputs(in, ct.character, t, 1, /*before=*/true);
+    addMotionInputs(in, ct.character, t, 1, Side::Before);
     addMotionInputs(in, ct.character, t, 1);
     std::vector<ContactPoints> points;
     std::string names = label;
@@ -851,15 +905,15 @@ void SpacetimeProblem::initialGuess() {
 }
 
 Eigen::VectorXd SpacetimeProblem::jointState(int c, double t, int order) const {
-  return jointStateOnSide(c, t, order, /*before=*/false);
+  return jointStateOnSide(c, t, order, Side::Contacts);
 }
 
-Eigen::VectorXd SpacetimeProblem::jointStateOnSide(int c, double t, int order, bool before) const {
+Eigen::VectorXd SpacetimeProblem::jointStateOnSide(int c, double t, int order, Side side) const {
   const CharacterVariables& cv = characters_[c];
   Eigen::VectorXd out = Eigen::VectorXd::Zero(cv.dofs);
   for (const DofGroup& g : cv.groups) {
     const int n = static_cast<int>(g.dofs.size());
-    const GroupBasis gb = groupBasis(c, g, t, order, before);
+    const GroupBasis gb = groupBasis(c, g, t, order, side);
     for (int i = 0; i < gb.count; ++i)
       for (int k = 0; k < n; ++k)
         out[g.dofs[k]] += gb.weight[i] * x_[gb.start[i] + gb.index[i] + k];
@@ -869,12 +923,12 @@ Eigen::VectorXd SpacetimeProblem::jointStateOnSide(int c, double t, int order, b
 
 void SpacetimeProblem::fitBubbles(int c, const DofGroup& g,
                                   const std::function<Eigen::VectorXd(double)>& target) {
-  const int n = static_cast<int>(g.dofs.size()), m = g.bubbles;
-  if (m == 0) return;
+  const int n = static_cast<int>(g.dofs.size());
   std::fill(x_.begin() + g.bubbleOffset, x_.begin() + g.offset + g.variableCount(), 0.0);
   for (size_t k = 0; k + 1 < g.breaks.size(); ++k) {
     const double a = g.breaks[k], h = g.breaks[k + 1] - a;
-    if (h < kTimeTolerance) continue;  // an impact's repeated breakpoint
+    const int m = g.bubblesIn(static_cast<int>(k));
+    if (h < kTimeTolerance || m == 0) continue;  // an impact's repeated breakpoint
     // Interpolate the target at m interior points: the bubbles vanish at the ends, so the
     // Hermite part keeps the breakpoint data.
     Eigen::MatrixXd B(m, m), R(m, n);
@@ -886,12 +940,12 @@ void SpacetimeProblem::fitBubbles(int c, const DofGroup& g,
     }
     const Eigen::MatrixXd coefficients = B.partialPivLu().solve(R);
     for (int j = 0; j < m; ++j)
-      for (int d = 0; d < n; ++d) x_[g.bubbleOffset + k * g.bubbleBlockSize() + j * n + d] = coefficients(j, d);
+      for (int d = 0; d < n; ++d) x_[g.bubbleStart(static_cast<int>(k)) + j * n + d] = coefficients(j, d);
   }
 }
 
 Eigen::VectorXd SpacetimeProblem::jointStateBefore(int c, double t, int order) const {
-  return jointStateOnSide(c, t, order, /*before=*/true);
+  return jointStateOnSide(c, t, order, Side::Before);
 }
 
 std::vector<Eigen::Vector3d> SpacetimeProblem::contactImpulses(int j) const {

@@ -25,6 +25,30 @@ void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weigh
   }
 }
 
+void gaussRadau(int n, std::vector<double>* nodes, std::vector<double>* weights) {
+  // Golub-Welsch on the Legendre Jacobi matrix with its last diagonal entry modified so that -1
+  // is an eigenvalue (Golub 1973, "Some modified matrix eigenvalue problems"): with the
+  // monic recurrence p_{k+1} = x p_k - b_k p_{k-1}, b_k = k^2 / (4k^2 - 1), the entry is
+  // a = -1 - b_{n-1} p_{n-2}(-1) / p_{n-1}(-1).
+  nodes->assign(n, -1.0);
+  weights->assign(n, 2.0);
+  if (n == 1) return;
+  auto b = [](int k) { return k * k / (4.0 * k * k - 1); };
+  std::vector<double> p(n);  // monic Legendre p_k(-1)
+  p[0] = 1;
+  p[1] = -1;
+  for (int k = 1; k + 1 < n; ++k) p[k + 1] = -p[k] - b(k) * p[k - 1];
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = std::sqrt(b(k));
+  J(n - 1, n - 1) = -1 - b(n - 1) * p[n - 2] / p[n - 1];
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+  for (int i = 0; i < n; ++i) {
+    (*nodes)[i] = es.eigenvalues()[i];
+    (*weights)[i] = 2 * es.eigenvectors()(0, i) * es.eigenvectors()(0, i);
+  }
+  (*nodes)[0] = -1;  // exactly
+}
+
 Transcription Transcription::fromScene(const Scene& scene) {
   Transcription tr;
   const double t0 = scene.startTime, t1 = scene.endTime;
@@ -41,11 +65,32 @@ Transcription Transcription::fromScene(const Scene& scene) {
                                    [](double a, double b) { return std::abs(a - b) < 1e-9; }),
                        tr.breakpoints.end());
   tr.breakpoints.back() = t1;
-  std::vector<double> x, w;
+  std::vector<double> x, w, xr, wr;
   gaussLegendre(scene.transcription.samplesPerSegment, &x, &w);
+  gaussRadau(scene.transcription.samplesPerSegment + 1, &xr, &wr);
+  // An interval that starts where a contact ends and that no contact covers begins a flight
+  // (see Sample::after). Free contact ends move their breakpoint: they keep Gauss nodes.
+  auto startsFlight = [&](double a, double b) {
+    bool liftOff = false;
+    for (const TermSpec& t : scene.terms) {
+      if (!t.enabled || t.kind != TermKind::Contact) continue;
+      if (t.start < b - 1e-9 && t.end > a + 1e-9) return false;  // a contact covers it
+      if (std::abs(t.end - a) < 1e-9 && !t.freeEnd) liftOff = true;
+    }
+    return liftOff;
+  };
   for (size_t k = 0; k + 1 < tr.breakpoints.size(); ++k) {
     const double a = tr.breakpoints[k], h = tr.breakpoints[k + 1] - a;
-    for (size_t i = 0; i < x.size(); ++i) tr.samples.push_back({a + h * 0.5 * (x[i] + 1), 0.5 * h * w[i]});
+    const bool radau = startsFlight(a, a + h);
+    if (radau) tr.flightStarts.push_back(a);
+    const std::vector<double>& nodes = radau ? xr : x;
+    const std::vector<double>& weights = radau ? wr : w;
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      Sample s{a + h * 0.5 * (nodes[i] + 1), 0.5 * h * weights[i]};
+      s.after = radau && i == 0;
+      if (s.after) s.time = a;
+      tr.samples.push_back(s);
+    }
   }
   std::vector<double> extra = {t0, t1};
   for (const TermSpec& t : scene.terms)
@@ -53,9 +98,9 @@ Transcription Transcription::fromScene(const Scene& scene) {
       extra.push_back(t.start);
       extra.push_back(t.end);
     }
-  auto present = [&](double t) {
+  auto present = [&](double t) {  // a sample read at t on its own contacts' side
     return std::any_of(tr.samples.begin(), tr.samples.end(),
-                       [&](const Sample& s) { return std::abs(s.time - t) < 1e-9; });
+                       [&](const Sample& s) { return !s.after && std::abs(s.time - t) < 1e-9; });
   };
   for (double e : extra)
     if (!present(e)) tr.samples.push_back({e, 0.0});

@@ -139,11 +139,10 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
         r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples,
                                                 unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time)));
     // The dense grid, ten times finer again over the grid step on each side of every contact's
-    // start and end. The residual jumps there: the edge's sample reads the contact side, and
-    // the flight's first instant is no collocation point (the root's acceleration is C0 only at
-    // breakpoints). luxo_jump: 0 at the lift-off, 0.0052 x weight 0.02 ms after, under 0.001
-    // 1.2 ms after; the uniform grid alone reported 0.0031 (found replaying the files in MuJoCo
-    // at 4 kHz, tests/solver/mujoco_replay_test.cpp).
+    // start and end, where the root's acceleration and the ground force jump. Before the flight
+    // was collocated from its first instant (Sample::after), luxo_jump's residual was 0 at the
+    // lift-off, 0.0052 x weight 0.02 ms after and under 0.001 1.2 ms after, and the uniform grid
+    // alone reported 0.0031 (found replaying the files in MuJoCo at 4 kHz).
     std::vector<double> times = dense;
     const double step = dense.size() > 1 ? dense[1] - dense[0] : 0;
     for (const ContactVariables& ct : problem.contacts()) {

@@ -191,9 +191,10 @@ TEST(ParticleClearance, PassesOverABox) {
   ASSERT_TRUE(free.converged && cleared.converged) << free.reason << " / " << cleared.reason;
   std::printf("inside the box: free %.4f m, with clearance %.4f m\n", insideFree, insideCleared);
   EXPECT_GT(insideFree, 1e-3);      // the box matters
-  // Path constraints hold at the samples; between them the path may cut the box's corner
-  // (measured: 68 mm into the box without the term, 8 mm with it at 40 control points/s).
-  EXPECT_LT(insideCleared, 1e-2);
+  // A box clearance holds at ten instants per sample gap; between them the path may still cut
+  // the box's corner (measured: 68 mm into the box without the term, 0.4 mm with it at 40
+  // control points/s; 8 mm when it held at the samples only).
+  EXPECT_LT(insideCleared, 1.5e-3);
   EXPECT_LT(insideCleared, insideFree / 5);
   EXPECT_GT(cleared.objective, free.objective);
 }

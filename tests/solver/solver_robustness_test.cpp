@@ -60,6 +60,41 @@ TEST(SolverRobustness, WarmStartFromTheSolutionConvergesImmediately) {
   EXPECT_LT(cold.iterations + cold.outerIterations, 100);
 }
 
+// The time limit holds inside the Newton polish too: a warm re-solve after a pin moved (the
+// editor's case, where the polish runs first) with its budget already spent stops with the
+// time limit as the reason, takes no Newton step and keeps the variables it started from.
+TEST(SolverRobustness, TheTimeLimitStopsTheNewtonPolish) {
+  Scene scene;
+  auto problem = load("particle_gravity.json", &scene);
+  ASSERT_TRUE(solveSpacetime(*problem, SolverOptions()).converged);
+  const SolutionState solved = problem->state();
+  for (TermSpec& t : scene.terms)
+    if (t.kind == TermKind::Pin && t.time > 0.4 && t.time < 0.6) t.position.x() += 0.05;
+  std::string error;
+  auto moved = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(moved) << error;
+  ASSERT_TRUE(moved->restore(solved));
+  const std::vector<double> before = moved->variables();
+
+  SolverOptions warm;
+  warm.warmStart = true;
+  warm.maxSeconds = 1e-9;
+  const SolverSummary s = solveSpacetime(*moved, warm);
+  EXPECT_EQ(s.status, SolveStatus::TimeLimit) << s.reason;
+  EXPECT_FALSE(s.converged);
+  EXPECT_EQ(s.newtonSteps, 0);
+  EXPECT_EQ(s.iterations, 0);
+  EXPECT_EQ(moved->variables(), before);
+
+  // With time, the same warm re-solve is the polish's: it converges in Newton steps alone.
+  ASSERT_TRUE(moved->restore(solved));
+  warm.maxSeconds = 300;
+  const SolverSummary full = solveSpacetime(*moved, warm);
+  EXPECT_TRUE(full.converged && full.polished) << full.reason;
+  EXPECT_GT(full.newtonSteps, 0);
+  EXPECT_EQ(full.iterations, 0);
+}
+
 TEST(SolverRobustness, InvalidOptionsAreReported) {
   auto problem = load("particle.json");
   SolverOptions o;

@@ -164,6 +164,23 @@ class ContactAnchorKernel : public Kernel {
   double ground_;
 };
 
+// Contact points are at rest (order 1: their world velocity is zero) or do not accelerate
+// (order 2: their world acceleration is zero, RBDA eq. 2.42 via pointAcceleration). z = [q, qd]
+// or [q, qd, qdd]; forceDims rows per point (x, y in the plane). Keeps the points of a contact
+// that does not hold the root still between its anchor and its lift-off (SpacetimeProblem).
+class ContactPointMotionKernel : public Kernel {
+ public:
+  ContactPointMotionKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
+                           int forceDims, int order, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  ContactPoints contact_;
+  int forceDims_;
+  int order_;
+};
+
 // The contact forces of one sample lie in the friction cone (the ground only pushes). Forces
 // are linear between samples and the cone is convex, so they then lie in the cone at every
 // instant, not only at samples. Planar: the exact cone |fx| <= mu fy; 3D: the inscribed

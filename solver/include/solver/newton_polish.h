@@ -31,6 +31,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <string>
 
 #include "solver/spacetime_problem.h"
@@ -42,6 +43,9 @@ struct PolishOptions {
   double tolerance = 1e-7;     // largest constraint row at the end (as SolverOptions::tolerance)
   double kktTolerance = 1e-8;  // |J_r^T r + A^T y|_inf relative to max(1, |J_r^T r|_inf)
   int threads = 1;
+  // Wall-clock deadline (the solve's maxSeconds): checked before every Newton step; past it the
+  // polish restores its starting point and stops.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 
 struct PolishResult {

@@ -11,6 +11,8 @@
 //
 // Held stances: a contact whose points fix the floating root (held_stances.cpp) holds the root
 // still by construction - one pose, zero velocity - instead of by anchor rows at the samples.
+// Any other contact with a fixed end keeps its points still by their motion: anchored and at
+// rest at its first instant, zero acceleration at every collocation sample.
 // Lift-off: a contact that ends before the clip does lets go with zero force (letsGo).
 //
 // Free contact ends (the scene's `freeEnd`): the lift-off instant T of such a contact is one
@@ -43,6 +45,13 @@
 
 namespace spacetime {
 
+// Which root (Hermite) interval an instant on a breakpoint reads; the root's acceleration jumps
+// there. Contacts: the interval whose contacts are those active at t (the instant a contact ends
+// belongs to the contact phase, one that begins to it too). Before: the interval that ends at t
+// (the state just before an impact; the flight just before a touch-down). After: the interval
+// that starts at t (the flight just after a lift-off).
+enum class Side { Contacts, Before, After };
+
 // Two instants closer than this are the same (contact edges, samples, breakpoints).
 inline constexpr double kTimeTolerance = 1e-9;
 
@@ -58,17 +67,23 @@ inline constexpr double kTimeTolerance = 1e-9;
 //   collocated once per segment would have a null mode (alternating control points vanish at
 //   segment midpoints) and could wiggle freely between samples; a C2 spline collocated more
 //   often would have fewer unknowns than equations. The root's acceleration may jump at
-//   breakpoints, as it must where a contact begins or ends.
+//   breakpoints, as it must where a contact begins or ends. The interval that starts a flight
+//   after a lift-off has s - 1 bubbles and s + 1 Radau nodes, the first at the lift-off read on
+//   the flight side (Transcription::flightStarts): physics holds from the flight's first instant.
 struct DofGroup {
   bool hermite = false;
   UniformBSpline spline;         // B-spline group
   std::vector<double> breaks;    // Hermite group: breakpoints
   int bubbles = 0;               // Hermite group: interior coefficients per interval and dof
+  // Hermite: intervals with one more bubble (1), where a flight starts after a lift-off and the
+  // transcription collocates s + 1 Radau nodes (Sample::after); empty: none.
+  std::vector<int> extraBubble;
+  std::vector<int> bubbleStarts;  // interval k's bubbles start at x[bubbleStarts[k]]
   std::vector<int> dofs;         // dof indices in this group
   int offset = 0;  // B-spline: control point k at offset + k * n; Hermite: breakpoint k holds
                    // positions then velocities at offset + k * 2n (n = dofs.size())
-  int bubbleOffset = 0;  // Hermite: interval k's bubbles at bubbleOffset + k * bubbles * n,
-                         // bubble j of dof d at + j * n + d
+  int bubbleOffset = 0;  // Hermite: the intervals' bubbles from here, interval k's at
+                         // bubbleStart(k), bubble j of dof d at + j * n + d
   // Hermite: held stances (see SpacetimeProblem::layoutHeldStances). poseOf[k] is the breakpoint
   // whose positions hold breakpoint k's pose while a contact holds the root still (-1: free);
   // heldInterval[k] says interval k lies inside such a stance (the root is constant there).
@@ -83,11 +98,27 @@ struct DofGroup {
   int blockCount() const {
     return hermite ? static_cast<int>(breaks.size()) : spline.controlPointCount();
   }
-  int bubbleBlockSize() const { return bubbles * static_cast<int>(dofs.size()); }
+  int bubblesIn(int k) const {
+    return bubbles + (k < static_cast<int>(extraBubble.size()) ? extraBubble[k] : 0);
+  }
+  int bubbleBlockSize(int k) const { return bubblesIn(k) * static_cast<int>(dofs.size()); }
+  int bubbleStart(int k) const { return bubbleStarts[k]; }
+  // Lays out the bubbles from bubbleOffset (SpacetimeProblem::assemble, once breaks and
+  // extraBubble are final; bubbleStart reads only this layout).
+  void layoutBubbles() {
+    bubbleStarts.clear();
+    int at = bubbleOffset;
+    for (int k = 0; k + 1 < blockCount(); ++k) {
+      bubbleStarts.push_back(at);
+      at += bubbleBlockSize(k);
+    }
+  }
   // All of the group's values: blocks, then (Hermite) bubbles.
   int variableCount() const {
-    return blockSize() * blockCount() +
-           (hermite ? bubbleBlockSize() * std::max(0, blockCount() - 1) : 0);
+    int bubbleValues = 0;
+    if (hermite)
+      for (int k = 0; k + 1 < blockCount(); ++k) bubbleValues += bubbleBlockSize(k);
+    return blockSize() * blockCount() + bubbleValues;
   }
 };
 
@@ -95,7 +126,7 @@ struct DofGroup {
 // time: dof k of the group = sum over i of weight[i] * x[start[i] + index[i] + k], where
 // x[start[i] .. start[i] + size[i]) is one parameter block.
 struct GroupBasis {
-  static constexpr int kCapacity = 4 + TranscriptionSpec::kMaxSamplesPerSegment - 2;
+  static constexpr int kCapacity = 4 + TranscriptionSpec::kMaxSamplesPerSegment - 1;  // + a flight start's extra bubble
   int count = 0;
   std::array<int, kCapacity> start{}, size{}, index{};
   std::array<double, kCapacity> weight{};
@@ -111,6 +142,7 @@ struct TimeRef {
   int interval = -1;      // root interval holding it (event refs of floating characters)
   double intervalStart = 0, intervalEnd = 0;  // its ends when T = eventTime
   int side = 0;           // -1: in [left, T), +1: in (T, right], 0: at T
+  Side rootSide = Side::Contacts;  // the root interval read at a breakpoint (fixed times only)
   double at(double T) const { return event < 0 ? time : time + rate * (T - eventTime); }
 };
 
@@ -241,7 +273,7 @@ class SpacetimeProblem {
   TimeRef timeRef(int character, double t) const;
   // Input map helpers: append z rows for a character's q^(order)(t), a contact's forces at t,
   // the anchors.
-  void addMotionInputs(InputMap& in, int character, double t, int order, bool before = false);
+  void addMotionInputs(InputMap& in, int character, double t, int order, Side side = Side::Contacts);
   void addMotionInputs(InputMap& in, int character, const TimeRef& r, double T, int order);
   void addForceInputs(InputMap& in, int contact, double t, double scale = 1.0);
   // Forces at a contact's sample i, or between samples i and i + 1 with weight a on the next
@@ -252,13 +284,11 @@ class SpacetimeProblem {
   void addAnchorInputs(InputMap& in, int contact);
   // z rows equal to (scale times) the variables x[offset .. offset + size).
   void addBlockInputs(InputMap& in, int offset, int size, double scale = 1.0);
-  // The basis of a group at t. At a Hermite breakpoint the interval whose contacts are those
-  // active at t is used (the instant a contact ends belongs to the contact phase); with
-  // `before`, the interval that ends at t (the state just before an impact).
+  // The basis of a group at t, on the root interval `side` picks (see Side).
   GroupBasis groupBasis(int character, const DofGroup& g, double t, int order,
-                        bool before = false) const;
+                        Side side = Side::Contacts) const;
   // The root interval holding t (the rule of groupBasis).
-  int hermiteInterval(int character, const DofGroup& g, double t, bool before) const;
+  int hermiteInterval(int character, const DofGroup& g, double t, Side side) const;
   // The basis of a Hermite group's interval k = [a, b] at t, and in `slope` its derivative in
   // the event time T given dt/dT, da/dT and db/dT.
   GroupBasis hermiteBasis(const DofGroup& g, int k, double a, double b, double t, int order,
@@ -294,7 +324,7 @@ class SpacetimeProblem {
   // Sets a Hermite group's bubbles so that the group interpolates target(t) (a full joint
   // vector) at interior points of each interval, its breakpoint data already set.
   void fitBubbles(int character, const DofGroup& g, const std::function<Eigen::VectorXd(double)>& target);
-  Eigen::VectorXd jointStateOnSide(int character, double t, int order, bool before) const;
+  Eigen::VectorXd jointStateOnSide(int character, double t, int order, Side side) const;
   // What a sample's inputs are made of, fixed when the problem is built: its time, the active
   // contacts and where their forces are read.
   struct SampleInputs {
@@ -303,7 +333,7 @@ class SpacetimeProblem {
     std::vector<int> active;
     std::vector<std::pair<int, double>> forces;
   };
-  SampleInputs sampleInputs(int character, double t) const;
+  SampleInputs sampleInputs(int character, double t, bool after = false) const;
   void addSampleInputs(InputMap& in, const SampleInputs& s, double T);
   // A formula of character c compiled for the given active contacts (cached); null and an
   // error on a bad formula.

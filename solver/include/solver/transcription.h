@@ -5,7 +5,9 @@
 // Breakpoints are the spline's knots plus every contact edge. Samples are Gauss-Legendre nodes
 // inside every interval between breakpoints (two by default: the collocation of de Boor &
 // Swartz 1973 for the root's C1 piecewise cubics, and exact quadrature of the particle's
-// piecewise-quadratic integrands), plus the clip's ends and every contact edge with zero
+// piecewise-quadratic integrands) - except the interval that starts a flight after a fixed
+// lift-off, which gets one more node, left Gauss-Radau, the first at the lift-off itself on the
+// flight side (Sample::after) - plus the clip's ends and every contact edge with zero
 // quadrature weight: physics must hold at the instants where contact begins and ends; plus
 // "stance" samples at the knots inside each contact (zero weight, see Sample::stance).
 #pragma once
@@ -25,12 +27,22 @@ struct Sample {
   // SpacetimeProblem::physicsAt). The joints' jerk jumps at knots, so the ground force a stance
   // needs has a kink there, which the Gauss points on either side do not see.
   bool stance = false;
+  // The first instant of a flight: evaluated on the root interval that starts at `time`, without
+  // the contacts ending there. The interval after a lift-off is collocated at left Gauss-Radau
+  // nodes, whose first node is this instant: the root's acceleration jumps at the lift-off
+  // breakpoint, and Gauss nodes left the flight's first instants free (luxo_jump: 0.0052 x
+  // weight unexplained just after lift-off).
+  bool after = false;
 };
 
 struct Transcription {
   UniformBSpline motion;            // the actuated joints' spline
   std::vector<double> breakpoints;  // knots and contact edges, sorted
   std::vector<Sample> samples;      // sorted by time
+  // Breakpoints where a flight starts after a fixed lift-off: the interval from there gets
+  // s + 1 left Gauss-Radau nodes (the first read on the flight side, Sample::after) and the
+  // root one more bubble there (SpacetimeProblem).
+  std::vector<double> flightStarts;
 
   static Transcription fromScene(const Scene& scene);
   // Samples whose time lies in [t0, t1] (inclusive, with a small tolerance).
@@ -45,5 +57,8 @@ int segmentsFor(double t0, double t1, double rate);
 
 // Gauss-Legendre nodes on [-1, 1] and weights, for 1 <= n <= 16 (Golub-Welsch).
 void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights);
+// Left Gauss-Radau nodes on [-1, 1] (the first is -1) and weights, for 1 <= n <= 16: exact for
+// polynomials of degree 2n - 2.
+void gaussRadau(int n, std::vector<double>* nodes, std::vector<double>* weights);
 
 }  // namespace spacetime

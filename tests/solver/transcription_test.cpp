@@ -1,0 +1,80 @@
+// The collocation grid: Gauss-Radau nodes against the exactness that defines them, and the
+// transcription's use of them where a flight starts after a lift-off.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "../shipped_scene.h"
+#include "solver/spacetime_problem.h"
+#include "solver/transcription.h"
+
+namespace spacetime {
+namespace {
+
+// n-point left Gauss-Radau quadrature starts at -1 and integrates x^k exactly on [-1, 1] for
+// k <= 2n - 2, and not for 2n - 1 (one degree less than Gauss-Legendre: one node is fixed).
+TEST(GaussRadau, StartsAtMinusOneAndIsExactToDegree2nMinus2) {
+  for (int n = 1; n <= 9; ++n) {
+    std::vector<double> x, w;
+    gaussRadau(n, &x, &w);
+    ASSERT_EQ(static_cast<int>(x.size()), n);
+    EXPECT_EQ(x[0], -1.0);
+    for (int i = 1; i < n; ++i) EXPECT_GT(x[i], x[i - 1]) << n;
+    for (int k = 0; k <= 2 * n - 1; ++k) {
+      double sum = 0;
+      for (int i = 0; i < n; ++i) sum += w[i] * std::pow(x[i], k);
+      const double exact = k % 2 == 0 ? 2.0 / (k + 1) : 0.0;
+      if (k <= 2 * n - 2) EXPECT_NEAR(sum, exact, 1e-13) << "n " << n << " x^" << k;
+      else EXPECT_GT(std::abs(sum - exact), 1e-6) << "n " << n << " x^" << k;
+    }
+  }
+  // n = 3 in closed form: -1, (1 -+ sqrt 6) / 5; weights 2/9, (16 +- sqrt 6) / 18.
+  std::vector<double> x, w;
+  gaussRadau(3, &x, &w);
+  EXPECT_NEAR(x[1], (1 - std::sqrt(6.0)) / 5, 1e-14);
+  EXPECT_NEAR(x[2], (1 + std::sqrt(6.0)) / 5, 1e-14);
+  EXPECT_NEAR(w[0], 2.0 / 9, 1e-14);
+  EXPECT_NEAR(w[1], (16 + std::sqrt(6.0)) / 18, 1e-14);
+  EXPECT_NEAR(w[2], (16 - std::sqrt(6.0)) / 18, 1e-14);
+}
+
+// luxo_jump lifts off at 0.4 s: the interval [0.4, 0.45] holds s + 1 Radau samples, the first
+// at 0.4 read on the flight side, with weights summing to its length; every other interval
+// keeps s Gauss samples; the root has one more bubble there (s - 1 instead of s - 2).
+TEST(Transcription, AFlightStartGetsRadauNodesAndTheRootABubble) {
+  const Scene scene = testing::shippedScene("luxo_jump.json");
+  const int s = scene.transcription.samplesPerSegment;
+  const Transcription tr = Transcription::fromScene(scene);
+  ASSERT_EQ(tr.flightStarts.size(), 1u);
+  EXPECT_NEAR(tr.flightStarts[0], 0.4, 1e-12);
+  int inside = 0, after = 0;
+  double weight = 0;
+  for (const Sample& smp : tr.samples) {
+    after += smp.after;
+    if (smp.weight > 0 && smp.time >= 0.4 - 1e-12 && smp.time < 0.45 - 1e-12) {
+      ++inside;
+      weight += smp.weight;
+      if (std::abs(smp.time - 0.4) < 1e-12) EXPECT_TRUE(smp.after);
+    }
+  }
+  EXPECT_EQ(after, 1);
+  EXPECT_EQ(inside, s + 1);
+  EXPECT_NEAR(weight, 0.05, 1e-12);
+  int gaussInNext = 0;
+  for (const Sample& smp : tr.samples) gaussInNext += smp.weight > 0 && smp.time > 0.45 && smp.time < 0.5;
+  EXPECT_EQ(gaussInNext, s);
+
+  std::string error;
+  const auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  const DofGroup* root = nullptr;
+  for (const DofGroup& g : problem->characters()[0].groups)
+    if (g.hermite) root = &g;
+  ASSERT_TRUE(root);
+  for (size_t k = 0; k + 1 < root->breaks.size(); ++k)
+    EXPECT_EQ(root->bubblesIn(static_cast<int>(k)), std::abs(root->breaks[k] - 0.4) < 1e-12 ? s - 1 : s - 2)
+        << "interval from " << root->breaks[k];
+}
+
+}  // namespace
+}  // namespace spacetime
