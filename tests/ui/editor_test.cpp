@@ -12,6 +12,9 @@
 #include <QStandardPaths>
 #include <QFile>
 #include <QFileInfo>
+#include <QJsonDocument>
+#include <QJsonObject>
+#include <QMenu>
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
@@ -20,6 +23,7 @@
 #include "core/scene_io.h"
 #include "ui/main_window.h"
 #include "ui/render_scene.h"
+#include "ui/solved_motion.h"
 #include "event_loop_gap.h"
 
 using namespace spacetime;
@@ -410,6 +414,87 @@ class EditorTest : public QObject {
     QVERIFY(head > 200);
     QVERIFY(background > total / 4);
     QVERIFY(background < total);
+  }
+
+  // The hurdle's clearances are drawn as blocks from the ground up to their height, under the
+  // cleared point's path over their interval; a clearance at the ground adds nothing, a box
+  // clearance is its box, and the selected term is drawn in the selection colour.
+  void clearancesAreDrawnWhereThePointMustPass() {
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/luxo_hurdle.json"));
+    Scene scene = w.document()->scene();
+    const std::vector<Model<double>>& models = w.document()->models();
+    std::string error;
+    const std::unique_ptr<SpacetimeProblem> problem = SpacetimeProblem::build(scene, &error);
+    QVERIFY2(problem, error.c_str());
+    const std::shared_ptr<SolvedMotion> guess = sampleMotion(*problem);  // the lamp moves forward
+    RenderOptions options;
+    options.selectedTerm = "hurdle_toe";
+    const RenderScene rs = buildRenderScene(scene, models, guess.get(), options);
+    std::vector<std::string> drawn;
+    for (const Obstacle& o : rs.obstacles) drawn.push_back(o.term);
+    QCOMPARE(drawn, (std::vector<std::string>{"hurdle_heel", "hurdle_toe"}));  // not heel_above_ground
+
+    const TermSpec* heel = nullptr;
+    for (const TermSpec& t : scene.terms)
+      if (t.id == "hurdle_heel") heel = &t;
+    QVERIFY(heel);
+    float xMin = 1e9f, xMax = -1e9f;
+    for (const Solid& box : rs.obstacles[0].boxes) {
+      QVERIFY(box.ghost && box.character < 0);  // translucent, never picked
+      QVERIFY(box.color.r > 0.8f && box.color.g < 0.4f);
+      for (float sx : {-0.5f, 0.5f})
+        for (float sy : {-0.5f, 0.5f}) {
+          const glm::vec3 corner = glm::vec3(box.transform * glm::vec4(sx, sy, 0.0f, 1.0f));
+          QVERIFY(std::abs(corner.y - (sy > 0 ? heel->height : scene.groundHeight)) < 1e-6);
+          xMin = std::min(xMin, corner.x);
+          xMax = std::max(xMax, corner.x);
+        }
+    }
+    const int base = models[0].bodyIndex("base");
+    for (double t : {heel->start, 0.5 * (heel->start + heel->end), heel->end}) {
+      const double x = bodyToWorld(models[0], poseAt(guess->animation.characters[0], t), base, heel->point).x();
+      QVERIFY2(x >= xMin - 1e-4 && x <= xMax + 1e-4, qPrintable(QString("x %1 outside [%2, %3]").arg(x).arg(xMin).arg(xMax)));
+    }
+    QVERIFY(xMax - xMin > 0.02);  // the path, not a marker
+    QVERIFY(rs.obstacles[1].boxes.front().color.g > 0.5f);  // selected: orange
+
+    for (TermSpec& t : scene.terms)
+      if (t.id == "hurdle_heel") {
+        t.box = true;
+        t.boxMin = Eigen::Vector3d(0.1, 0.0, -0.2);
+        t.boxMax = Eigen::Vector3d(0.3, 0.15, 0.2);
+      }
+    const RenderScene withBox = buildRenderScene(scene, models, guess.get(), RenderOptions{});
+    QCOMPARE(withBox.obstacles[0].boxes.size(), size_t(1));
+    const glm::mat4& m = withBox.obstacles[0].boxes[0].transform;
+    const glm::vec3 lo = glm::vec3(m * glm::vec4(-0.5f, -0.5f, -0.5f, 1.0f)), hi = glm::vec3(m * glm::vec4(0.5f, 0.5f, 0.5f, 1.0f));
+    QVERIFY(glm::length(lo - glm::vec3(0.1f, 0.0f, -0.2f)) < 1e-6f && glm::length(hi - glm::vec3(0.3f, 0.15f, 0.2f)) < 1e-6f);
+  }
+
+  // File > Open Example lists every scene in resources/scenes by its name, and each opens
+  // untitled (Save asks where to keep the copy).
+  void examplesMenuOpensEveryShippedScene() {
+    MainWindow w;
+    w.solveOnOpen = false;
+    auto* menu = w.findChild<QMenu*>("examplesMenu");
+    QVERIFY(menu);
+    QStringList shipped;
+    for (const QFileInfo& info : QDir(SPACETIME_SOURCE_DIR "/resources/scenes").entryInfoList({"*.json"}, QDir::Files, QDir::Name)) {
+      QFile f(info.filePath());
+      QVERIFY(f.open(QIODevice::ReadOnly));
+      shipped << QJsonDocument::fromJson(f.readAll()).object().value("name").toString();
+    }
+    QStringList listed;
+    for (QAction* a : menu->actions()) {
+      listed << a->text();
+      a->trigger();
+      QCOMPARE(QString::fromStdString(w.document()->scene().name), a->text());
+      QVERIFY(w.document()->filePath().isEmpty());
+      QVERIFY(!w.document()->scene().characters.empty());
+    }
+    QCOMPARE(listed, shipped);
+    QVERIFY(shipped.size() >= 7);
   }
 
   void clickingABodySelectsIt() {

@@ -7,6 +7,8 @@
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QJsonDocument>
+#include <QJsonObject>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QMimeData>
@@ -136,6 +138,19 @@ void MainWindow::createActions() {
     QString error;
     if (!path.isEmpty() && !openFile(path, &error)) QMessageBox::warning(this, tr("Open"), error);
   });
+  // Every shipped scene, by its name; it opens untitled, so Save asks where to keep the copy.
+  QMenu* examples = file->addMenu(tr("Open E&xample"));
+  examples->setObjectName("examplesMenu");
+  for (const QFileInfo& info : QDir(":/scenes").entryInfoList({"*.json"}, QDir::Files, QDir::Name)) {
+    QFile f(info.filePath());
+    const QString name = f.open(QIODevice::ReadOnly) ? QJsonDocument::fromJson(f.readAll()).object().value("name").toString() : QString();
+    const QString path = info.filePath();
+    examples->addAction(name.isEmpty() ? info.baseName() : name, this, [this, path] {
+      if (!maybeSave()) return;
+      QString error;
+      if (!openFile(path, &error)) QMessageBox::warning(this, tr("Open"), error);
+    });
+  }
   recentMenu_ = file->addMenu(tr("Open &Recent"));
   rebuildRecentMenu();
   auto saveAs = [this] {

@@ -70,6 +70,11 @@ void grow(RenderScene& rs, const glm::vec3& p, bool& first) {
   rs.boundsMax = glm::max(rs.boundsMax, p);
 }
 
+// A unit cube stretched over the axis-aligned box [lo, hi].
+glm::mat4 boxTransform(const glm::vec3& lo, const glm::vec3& hi) {
+  return glm::scale(glm::translate(glm::mat4(1.0f), (lo + hi) * 0.5f), glm::max(hi - lo, glm::vec3(1e-4f)));
+}
+
 }  // namespace
 
 namespace {
@@ -156,6 +161,58 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
         addArrow(rs, from, from + toGlm(F / weight) * 0.5f, glm::vec4(0.2f, 0.85f, 0.3f, 1.0f));
       }
     }
+
+  // Clearance obstacles. A height clearance is drawn as a block from the ground (or 1 cm below
+  // the height without a ground) up to the height, under the point's path over the interval:
+  // one box per path segment, as long as the segment and kObstacleDepth wide across it. A point
+  // that barely moves (the zero pose before a solve) gets a kObstacleDepth square block. A
+  // clearance at or below the ground is the ground itself and adds nothing.
+  constexpr float kObstacleDepth = 0.3f;
+  for (const TermSpec& t : scene.terms) {
+    if (t.kind != TermKind::Clearance) continue;
+    const glm::vec4 color = t.id == o.selectedTerm ? glm::vec4(1.0f, 0.55f, 0.1f, 0.45f) : glm::vec4(0.85f, 0.32f, 0.28f, 0.3f);
+    Obstacle obstacle{t.id, {}};
+    auto addBox = [&](const glm::mat4& m) { obstacle.boxes.push_back({Mesh::Cube, m, color, -1, {}, true}); };
+    if (t.box) {
+      const glm::vec3 lo = toGlm(t.boxMin), hi = toGlm(t.boxMax);
+      addBox(boxTransform(lo, hi));
+      grow(rs, lo, firstBound);
+      grow(rs, hi, firstBound);
+    } else {
+      const CharacterSpec* ch = scene.character(t.character);
+      const int c = ch ? static_cast<int>(ch - scene.characters.data()) : -1;
+      const int b = c >= 0 ? models[c].bodyIndex(t.body) : -1;
+      const float top = static_cast<float>(t.height);
+      const float bottom = scene.groundEnabled ? static_cast<float>(scene.groundHeight) : top - 0.01f;
+      if (b < 0 || top - bottom < 1e-3f) continue;
+      std::vector<glm::vec2> path;  // the point's (x, z) over the interval
+      const int steps = 24;
+      Data<double> data(models[c]);  // one for the whole path: this runs at every rebuild
+      for (int k = 0; k <= steps; ++k) {
+        const double time = t.start + (t.end - t.start) * k / steps;
+        const Eigen::VectorXd q = characterPose(models, motion, c, time);
+        forwardKinematics(models[c], data, q.data());
+        const glm::vec3 p = toGlm(pointPosition(data, b, t.point));
+        path.emplace_back(p.x, p.z);
+      }
+      float travel = 0;
+      for (size_t k = 1; k < path.size(); ++k) travel += glm::length(path[k] - path[k - 1]);
+      if (travel < 0.02f) path = {path.front() - glm::vec2(kObstacleDepth / 2, 0), path.front() + glm::vec2(kObstacleDepth / 2, 0)};
+      for (size_t k = 1; k < path.size(); ++k) {
+        const glm::vec2 a = path[k - 1], d = path[k] - a;
+        const float length = glm::length(d);
+        if (length < 1e-5f) continue;
+        const glm::vec2 mid = a + d * 0.5f, u = d / length;
+        // Columns: the segment's direction, up, across; then the centre.
+        glm::mat4 m(glm::vec4(u.x, 0, u.y, 0), glm::vec4(0, 1, 0, 0), glm::vec4(-u.y, 0, u.x, 0),
+                    glm::vec4(mid.x, (top + bottom) / 2, mid.y, 1));
+        addBox(glm::scale(m, glm::vec3(length, top - bottom, kObstacleDepth)));
+      }
+      grow(rs, glm::vec3(path.front().x, top, path.front().y), firstBound);
+      grow(rs, glm::vec3(path.back().x, top, path.back().y), firstBound);
+    }
+    if (!obstacle.boxes.empty()) rs.obstacles.push_back(std::move(obstacle));
+  }
 
   // Pin handles: the target, and where the pinned point is at the current time.
   const std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, o.time);

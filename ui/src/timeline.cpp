@@ -4,6 +4,7 @@
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
+#include <QStyle>
 #include <QVBoxLayout>
 #include <cmath>
 
@@ -191,19 +192,21 @@ Timeline::Timeline(Document* doc, QWidget* parent) : QWidget(parent), doc_(doc) 
   bar_ = new TimelineBar(doc_);
   layout->addWidget(bar_);
   auto* controls = new QHBoxLayout;
-  auto tool = [&](const QString& text, const QString& tip) {
+  // The style's media icons, not text glyphs: fonts without U+23EE (⏮) drew empty boxes.
+  auto tool = [&](QStyle::StandardPixmap icon, const QString& tip) {
     auto* b = new QToolButton;
-    b->setText(text);
+    b->setIcon(style()->standardIcon(icon));
     b->setToolTip(tip);
+    b->setAccessibleName(tip);
     controls->addWidget(b);
     return b;
   };
-  connect(tool("⏮", tr("Start")), &QToolButton::clicked, this, [this] { doc_->setCurrentTime(doc_->scene().startTime); });
-  connect(tool("◀", tr("Previous frame (Left)")), &QToolButton::clicked, this, [this] { step(-1); });
-  playButton_ = tool("▶", tr("Play / pause (Space)"));
+  connect(tool(QStyle::SP_MediaSkipBackward, tr("Start")), &QToolButton::clicked, this, [this] { doc_->setCurrentTime(doc_->scene().startTime); });
+  connect(tool(QStyle::SP_MediaSeekBackward, tr("Previous frame (Left)")), &QToolButton::clicked, this, [this] { step(-1); });
+  playButton_ = tool(QStyle::SP_MediaPlay, tr("Play / pause (Space)"));
   connect(playButton_, &QToolButton::clicked, this, &Timeline::togglePlay);
-  connect(tool("▶|", tr("Next frame (Right)")), &QToolButton::clicked, this, [this] { step(1); });
-  connect(tool("⏭", tr("End")), &QToolButton::clicked, this, [this] { doc_->setCurrentTime(doc_->scene().endTime); });
+  connect(tool(QStyle::SP_MediaSeekForward, tr("Next frame (Right)")), &QToolButton::clicked, this, [this] { step(1); });
+  connect(tool(QStyle::SP_MediaSkipForward, tr("End")), &QToolButton::clicked, this, [this] { doc_->setCurrentTime(doc_->scene().endTime); });
   loop_ = new QCheckBox(tr("Loop"));
   loop_->setChecked(true);
   controls->addWidget(loop_);
@@ -239,12 +242,12 @@ void Timeline::play() {
   if (doc_->currentTime() >= doc_->scene().endTime) doc_->setCurrentTime(doc_->scene().startTime);
   clock_.start();
   timer_.start();
-  playButton_->setText("⏸");
+  playButton_->setIcon(style()->standardIcon(QStyle::SP_MediaPause));
 }
 
 void Timeline::pause() {
   timer_.stop();
-  playButton_->setText("▶");
+  playButton_->setIcon(style()->standardIcon(QStyle::SP_MediaPlay));
 }
 
 void Timeline::togglePlay() { isPlaying() ? pause() : play(); }

@@ -211,6 +211,8 @@ void Viewport::paintGL() {
   solidShader_->bind();
   for (const Solid& s : rs.solids)
     if (s.ghost) drawSolid(s);
+  for (const Obstacle& obstacle : rs.obstacles)
+    for (const Solid& s : obstacle.boxes) drawSolid(s);
   glDepthMask(GL_TRUE);
 
   // Pin handles on top of everything: the target and a line from the pinned point.

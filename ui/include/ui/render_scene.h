@@ -41,8 +41,17 @@ struct Handle {  // a pin target the user can drag
   bool selected = false;
 };
 
+// What a clearance term keeps a body point out of, drawn as translucent boxes: the term's box,
+// or for a height clearance a block from the ground up to the height under the point's path
+// over the term's interval (the hurdle the point must pass over).
+struct Obstacle {
+  std::string term;
+  std::vector<Solid> boxes;  // unit cubes placed and scaled; never picked
+};
+
 struct RenderScene {
   std::vector<Solid> solids;
+  std::vector<Obstacle> obstacles;
   std::vector<Polyline> lines;
   std::vector<Handle> handles;
   bool ground = true;
