@@ -231,8 +231,9 @@ class SpacetimeProblem {
   // Whether contact j's points leave the ground at its end: it ends before the clip does and no
   // other contact carries any of its points on. Their force is then zero at that instant.
   bool letsGo(int j) const;
-  // Whether physics is imposed on character c at sample s: everywhere but at a stance sample
-  // (Sample::stance) outside the contacts that hold c's root.
+  // Whether physics is imposed on character c at sample s: at every collocation node and the
+  // clip's ends; at a contact edge only for the contact's own character; at a stance sample
+  // (Sample::stance) only inside the contacts that hold c's root.
   bool physicsAt(int c, const Sample& s) const;
   // The contacts of the same character that touch down with an impact at the same instant as
   // contact j (j included, in contact order): they share one velocity jump.
