@@ -317,7 +317,10 @@ class EditorTest : public QObject {
     const EventLoopGap hidden = luxoSolveGap(WindowMode::Hidden);
     qInfo("window hidden: longest event-loop gap %lld ms (ending %lld ms into the solve, after %d iterates), "
           "%d iterates delivered", hidden.worstMs, hidden.worstEndedAtMs, hidden.iteratesBeforeWorst, hidden.iterates);
-    QVERIFY(hidden.iterates >= 3);  // live refinement: iterates reached the interface
+    // Live refinement: iterates reached the interface. The hidden solve takes 0.6-0.9 s today and
+    // live iterates come at most every 250 ms, so 2 or 3 arrive (3 of 3 runs, then 2: asking for
+    // 3 failed at random); 2 still means a live iterate after the starting motion.
+    QVERIFY(hidden.iterates >= 2);
     QVERIFY2(hidden.worstMs >= 0 && hidden.worstMs <= 50, qPrintable(QString("event loop stalled %1 ms").arg(hidden.worstMs)));
     const EventLoopGap shown = luxoSolveGap(WindowMode::Shown);
     qInfo("window shown: longest event-loop gap %lld ms, %d iterates drawn", shown.worstMs, shown.iterates);
