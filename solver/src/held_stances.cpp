@@ -59,6 +59,7 @@ bool SpacetimeProblem::fixesRoot(int character, const ContactPoints& points) con
 }
 
 bool SpacetimeProblem::physicsAt(int character, const Sample& s) const {
+  if (!s.appliesTo(scene_.characters[character].id)) return false;  // another character's nodes
   if (s.stance)
     return std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
       return ct.holdsRoot && ct.character == character && ct.sampleIndex(s.time) >= 0;

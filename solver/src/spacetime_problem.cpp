@@ -24,11 +24,12 @@ bool touchesDownWithImpact(const TermSpec& t, const Scene& scene) {
          t.start > scene.startTime + kTimeTolerance && t.start < scene.endTime - kTimeTolerance;
 }
 
-// Times where an interval term is imposed: the samples inside it and its two ends; stance
-// samples (Sample::stance) only when asked for.
-std::vector<double> intervalTimes(const Transcription& tr, double a, double b, bool stance = false) {
+// Times where a character's interval term is imposed: that character's samples inside it and its
+// two ends; stance samples (Sample::stance) only when asked for.
+std::vector<double> intervalTimes(const Transcription& tr, const std::string& character, double a, double b,
+                                  bool stance = false) {
   std::vector<double> times = {a, b};
-  for (const Sample& s : tr.samplesIn(a, b))
+  for (const Sample& s : tr.samplesIn(a, b, &character))
     if (std::abs(s.time - a) > 1e-9 && std::abs(s.time - b) > 1e-9 && (stance || !s.stance))
       times.push_back(s.time);
   std::sort(times.begin(), times.end());
@@ -99,11 +100,11 @@ int SpacetimeProblem::characterIndex(const std::string& id) const {
   return 0;
 }
 
-std::vector<int> SpacetimeProblem::activeContacts(int c, double t) const {
+std::vector<int> SpacetimeProblem::activeContacts(int c, double t, bool afterEnds) const {
   std::vector<int> active;
   for (size_t j = 0; j < contacts_.size(); ++j)
     if (contacts_[j].character == c && t >= contacts_[j].start - kTimeTolerance &&
-        t <= contacts_[j].end + kTimeTolerance)
+        t <= contacts_[j].end + (afterEnds ? -kTimeTolerance : kTimeTolerance))
       active.push_back(static_cast<int>(j));
   return active;
 }
@@ -361,7 +362,7 @@ SpacetimeProblem::SampleInputs SpacetimeProblem::sampleInputs(int c, double t, b
   // The first instant of a flight (Sample::after): the interval that starts at t, without the
   // contacts that end at t.
   if (after) s.ref.rootSide = Side::After;
-  s.active = activeContacts(c, after ? t + 1e-6 : t);
+  s.active = activeContacts(c, t, after);
   for (int j : s.active) s.forces.push_back(contacts_[j].interpolation(t));
   return s;
 }
@@ -408,8 +409,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
       unactuated.extraBubble.assign(unactuated.breaks.size() - 1, 0);
       for (size_t k = 0; k + 1 < unactuated.breaks.size(); ++k)
         if (unactuated.breaks[k + 1] - unactuated.breaks[k] > kTimeTolerance)
-          for (double f : transcription_.flightStarts)
-            if (std::abs(f - unactuated.breaks[k]) < kTimeTolerance) unactuated.extraBubble[k] = 1;
+          if (transcription_.flightStartsAt(spec.id, unactuated.breaks[k])) unactuated.extraBubble[k] = 1;
       cv.groups.push_back(unactuated);
     }
     for (DofGroup& g : cv.groups) {
@@ -438,7 +438,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     cv.friction = t.friction;
     cv.forceDims = ch.forceDims;
     cv.holdsRoot = fixesRoot(cv.character, cv.points);
-    cv.times = intervalTimes(transcription_, t.start, t.end, cv.holdsRoot);
+    cv.times = intervalTimes(transcription_, t.character, t.start, t.end, cv.holdsRoot);
     cv.forceOffset = size;
     size += cv.blockSize() * static_cast<int>(cv.times.size());
     cv.anchorOffset = size;
@@ -535,7 +535,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
             (t.until && !checkOutsideWindows(*t.until, label, error)))
           return false;
         const std::vector<double> times =
-            t.until ? intervalTimes(transcription_, t.time, *t.until) : std::vector<double>{t.time};
+            t.until ? intervalTimes(transcription_, t.character, t.time, *t.until) : std::vector<double>{t.time};
         for (double time : times)
           addAt(std::make_shared<PinKernel>(cv.model, cv.model->bodyIndex(t.body), t.point, t.position,
                                             t.axes, at(label, time)),
@@ -551,7 +551,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
         // consecutive samples (0.4 mm). Height clearances stay at the samples: a smooth path over a
         // flat bound dips 3e-5 m between them (luxo_hurdle), and the extra rows slowed every Luxo
         // scene (luxo_jump: 600 instead of 360 iterations with the ground clearances densified).
-        for (double time : densified(intervalTimes(transcription_, t.start, t.end), t.box ? kBoxClearanceDensity : 1)) {
+        for (double time : densified(intervalTimes(transcription_, t.character, t.start, t.end), t.box ? kBoxClearanceDensity : 1)) {
           const int body = cv.model->bodyIndex(t.body);
           addAt(t.box ? std::make_shared<ClearanceKernel>(cv.model, body, t.point, t.boxMin, t.boxMax,
                                                           at(label, time))
@@ -569,6 +569,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     const int jj = static_cast<int>(j);
     const CharacterVariables& cv = characters_[ct.character];
     const std::string label = "contact '" + scene_.terms[ct.term].id + "'";
+    const std::string& owner = scene_.characters[ct.character].id;
     if (!checkOutsideWindows(ct.start, label, error) ||
         !checkOutsideWindows(ct.end, label, error))
       return false;
@@ -594,7 +595,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
                       });
       };
       if (!ct.impact()) addPointMotion(1, ct.times.front(), "at rest");
-      for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end))
+      for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end, &owner))
         if (smp.weight > 0 && !smp.after && !smp.stance) addPointMotion(2, smp.time, "still");  // collocation nodes
     }
     // A held stance's anchor rows are the same at every sample, and a contact kept still by its
@@ -617,7 +618,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     // weight 1e-3 the effect on solve time varies with the local optimum reached: Luxo jump
     // with 2 threads 3292 -> 1907 iterations; single-threaded jump 15.2 -> 15.4 s, heavy
     // 14.4 -> 11.4 s, hurdle 12.9 -> 25.0 s.
-    for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end)) {
+    for (const Sample& smp : transcription_.samplesIn(ct.start, ct.end, &owner)) {
       if (obj.contactForce <= 0 || smp.weight <= 0 || smp.after) continue;
       const TimeRef r = timeRef(ct.character, smp.time);
       const std::pair<int, double> force = ct.interpolation(smp.time);
@@ -780,7 +781,7 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
     for (double e : t.interval ? std::vector<double>{t.start, t.end} : std::vector<double>{t.time})
       if (!checkOutsideWindows(e, label, error)) return false;
     const std::vector<double> times =
-        t.interval ? intervalTimes(transcription_, t.start, t.end) : std::vector<double>{t.time};
+        t.interval ? intervalTimes(transcription_, t.character, t.start, t.end) : std::vector<double>{t.time};
     for (double time : times) {
       std::string why;
       const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
@@ -794,7 +795,7 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
   for (const FormulaObjective& f : scene_.objective.formulas) {
     const int c = characterIndex(f.character);
     for (const Sample& s : transcription_.samples) {
-      if (s.weight <= 0 || f.weight <= 0) continue;
+      if (s.weight <= 0 || f.weight <= 0 || !s.appliesTo(f.character)) continue;
       std::string why;
       if (!addFormula(c, s.time, f.expression, RowKind::Objective, std::sqrt(f.weight * s.weight), 0.0,
                       at("objective formula", s.time), &why)) {

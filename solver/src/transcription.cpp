@@ -68,29 +68,45 @@ Transcription Transcription::fromScene(const Scene& scene) {
   std::vector<double> x, w, xr, wr;
   gaussLegendre(scene.transcription.samplesPerSegment, &x, &w);
   gaussRadau(scene.transcription.samplesPerSegment + 1, &xr, &wr);
-  // An interval that starts where a contact ends and that no contact covers begins a flight
-  // (see Sample::after). Free contact ends move their breakpoint: they keep Gauss nodes.
-  auto startsFlight = [&](double a, double b) {
-    bool liftOff = false;
-    for (const TermSpec& t : scene.terms) {
-      if (!t.enabled || t.kind != TermKind::Contact) continue;
-      if (t.start < b - 1e-9 && t.end > a + 1e-9) return false;  // a contact covers it
-      if (std::abs(t.end - a) < 1e-9 && !t.freeEnd) liftOff = true;
+  // A character's flight starts at breakpoint a when one of its contacts ends there with a fixed
+  // end and none of its contacts covers [a, b] or begins at a (see Sample::after). Free contact
+  // ends move their breakpoint: they keep Gauss nodes.
+  auto liftingOff = [&](double a, double b) {
+    std::vector<std::string> ids;
+    for (const CharacterSpec& c : scene.characters) {
+      bool ends = false, stays = false;
+      for (const TermSpec& t : scene.terms) {
+        if (!t.enabled || t.kind != TermKind::Contact || t.character != c.id) continue;
+        if (std::abs(t.end - a) < 1e-9) (t.freeEnd ? stays : ends) = true;
+        if (std::abs(t.start - a) < 1e-9 || (t.start < b - 1e-9 && t.end > a + 1e-9)) stays = true;
+      }
+      if (ends && !stays) ids.push_back(c.id);
     }
-    return liftOff;
+    return ids;
+  };
+  auto addNodes = [&](double a, double h, const std::vector<double>& nodes, const std::vector<double>& weights,
+                      bool radau, const std::vector<std::string>& only, const std::vector<std::string>& except) {
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      Sample s;
+      s.time = a + h * 0.5 * (nodes[i] + 1);
+      s.weight = 0.5 * h * weights[i];
+      s.after = radau && i == 0;
+      if (s.after) s.time = a;
+      s.only = only;
+      s.except = except;
+      tr.samples.push_back(s);
+    }
   };
   for (size_t k = 0; k + 1 < tr.breakpoints.size(); ++k) {
     const double a = tr.breakpoints[k], h = tr.breakpoints[k + 1] - a;
-    const bool radau = startsFlight(a, a + h);
-    if (radau) tr.flightStarts.push_back(a);
-    const std::vector<double>& nodes = radau ? xr : x;
-    const std::vector<double>& weights = radau ? wr : w;
-    for (size_t i = 0; i < nodes.size(); ++i) {
-      Sample s{a + h * 0.5 * (nodes[i] + 1), 0.5 * h * weights[i]};
-      s.after = radau && i == 0;
-      if (s.after) s.time = a;
-      tr.samples.push_back(s);
+    const std::vector<std::string> lifting = liftingOff(a, a + h);
+    if (lifting.empty()) {
+      addNodes(a, h, x, w, false, {}, {});
+      continue;
     }
+    tr.flightStarts.push_back({a, lifting});
+    addNodes(a, h, xr, wr, true, lifting, {});
+    if (lifting.size() < scene.characters.size()) addNodes(a, h, x, w, false, {}, lifting);
   }
   std::vector<double> extra = {t0, t1};
   for (const TermSpec& t : scene.terms)
@@ -98,33 +114,50 @@ Transcription Transcription::fromScene(const Scene& scene) {
       extra.push_back(t.start);
       extra.push_back(t.end);
     }
+  auto zeroWeight = [](double t, bool stance) {
+    Sample s;
+    s.time = t;
+    s.stance = stance;
+    return s;
+  };
   auto present = [&](double t) {  // a sample read at t on its own contacts' side
     return std::any_of(tr.samples.begin(), tr.samples.end(),
                        [&](const Sample& s) { return !s.after && std::abs(s.time - t) < 1e-9; });
   };
   for (double e : extra)
-    if (!present(e)) tr.samples.push_back({e, 0.0});
+    if (!present(e)) tr.samples.push_back(zeroWeight(e, false));
   for (const TermSpec& t : scene.terms)
     if (t.enabled && t.kind == TermKind::Contact)
       for (int k = 1; k < tr.motion.segmentCount(); ++k) {
         const double knot = t0 + k * tr.motion.knotSpacing();
-        if (knot > t.start + 1e-9 && knot < t.end - 1e-9 && !present(knot)) tr.samples.push_back({knot, 0.0, true});
+        if (knot > t.start + 1e-9 && knot < t.end - 1e-9 && !present(knot)) tr.samples.push_back(zeroWeight(knot, true));
       }
   std::sort(tr.samples.begin(), tr.samples.end(),
             [](const Sample& a, const Sample& b) { return a.time < b.time; });
   return tr;
 }
 
-std::vector<Sample> Transcription::samplesIn(double t0, double t1) const {
+bool Sample::appliesTo(const std::string& character) const {
+  if (!only.empty()) return std::find(only.begin(), only.end(), character) != only.end();
+  return std::find(except.begin(), except.end(), character) == except.end();
+}
+
+bool Transcription::flightStartsAt(const std::string& id, double t) const {
+  return std::any_of(flightStarts.begin(), flightStarts.end(), [&](const FlightStart& f) {
+    return std::abs(f.time - t) < 1e-9 && std::find(f.characters.begin(), f.characters.end(), id) != f.characters.end();
+  });
+}
+
+std::vector<Sample> Transcription::samplesIn(double t0, double t1, const std::string* character) const {
   std::vector<Sample> out;
   for (const Sample& s : samples)
-    if (s.time >= t0 - 1e-9 && s.time <= t1 + 1e-9) out.push_back(s);
+    if (s.time >= t0 - 1e-9 && s.time <= t1 + 1e-9 && (!character || s.appliesTo(*character))) out.push_back(s);
   return out;
 }
 
 std::vector<double> Transcription::denseGrid(int factor) const {
   const int n = static_cast<int>(std::count_if(samples.begin(), samples.end(),
-                                               [](const Sample& s) { return !s.stance; })) * factor;
+                                               [](const Sample& s) { return !s.stance && s.except.empty(); })) * factor;
   std::vector<double> grid(n + 1);
   for (int i = 0; i <= n; ++i)
     grid[i] = motion.start() + (motion.end() - motion.start()) * i / n;

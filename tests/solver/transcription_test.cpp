@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "../shipped_scene.h"
+#include "staggered_lamps.h"
 #include "solver/spacetime_problem.h"
 #include "solver/transcription.h"
 
@@ -46,7 +49,7 @@ TEST(Transcription, AFlightStartGetsRadauNodesAndTheRootABubble) {
   const int s = scene.transcription.samplesPerSegment;
   const Transcription tr = Transcription::fromScene(scene);
   ASSERT_EQ(tr.flightStarts.size(), 1u);
-  EXPECT_NEAR(tr.flightStarts[0], 0.4, 1e-12);
+  EXPECT_NEAR(tr.flightStarts[0].time, 0.4, 1e-12);
   int inside = 0, after = 0;
   double weight = 0;
   for (const Sample& smp : tr.samples) {
@@ -74,6 +77,48 @@ TEST(Transcription, AFlightStartGetsRadauNodesAndTheRootABubble) {
   for (size_t k = 0; k + 1 < root->breaks.size(); ++k)
     EXPECT_EQ(root->bubblesIn(static_cast<int>(k)), std::abs(root->breaks[k] - 0.4) < 1e-12 ? s - 1 : s - 2)
         << "interval from " << root->breaks[k];
+}
+
+// Two lamps lifting off at 0.4 s and 0.5 s: each flight start gets Radau nodes for the lamp
+// lifting off and Gauss nodes for the other (standing at 0.4, flying at 0.5), each lamp's
+// weights on every interval sum to its length, and only the lifting lamp's root gets the bubble.
+TEST(Transcription, EachCharacterHasItsOwnNodesWhereAFlightStarts) {
+  const Scene first = testing::shippedScene("luxo_jump.json");
+  const Scene both = testing::together(first, testing::laterLamp(first));
+  const int s = both.transcription.samplesPerSegment;
+  const Transcription tr = Transcription::fromScene(both);
+  ASSERT_EQ(tr.flightStarts.size(), 2u);
+  const std::string ids[2] = {"luxo", "luxo2"};
+  for (int c = 0; c < 2; ++c) {
+    const double liftOff = c == 0 ? 0.4 : 0.5;
+    EXPECT_NEAR(tr.flightStarts[c].time, liftOff, 1e-12);
+    EXPECT_EQ(tr.flightStarts[c].characters, std::vector<std::string>{ids[c]});
+    for (double start : {0.4, 0.5}) {
+      int nodes = 0, after = 0;
+      double weight = 0;
+      for (const Sample& smp : tr.samples)
+        if (smp.appliesTo(ids[c]) && smp.weight > 0 && smp.time >= start - 1e-12 && smp.time < start + 0.05 - 1e-12) {
+          ++nodes;
+          after += smp.after;
+          weight += smp.weight;
+        }
+      const bool lifting = std::abs(start - liftOff) < 1e-12;
+      EXPECT_EQ(nodes, lifting ? s + 1 : s) << ids[c] << " from " << start;
+      EXPECT_EQ(after, lifting ? 1 : 0) << ids[c] << " from " << start;
+      EXPECT_NEAR(weight, 0.05, 1e-12) << ids[c] << " from " << start;
+    }
+  }
+
+  std::string error;
+  const auto problem = SpacetimeProblem::build(both, &error);
+  ASSERT_TRUE(problem) << error;
+  for (int c = 0; c < 2; ++c) {
+    const DofGroup& root = problem->characters()[c].groups[1];
+    ASSERT_TRUE(root.hermite);
+    for (size_t k = 0; k + 1 < root.breaks.size(); ++k)
+      EXPECT_EQ(root.bubblesIn(static_cast<int>(k)), std::abs(root.breaks[k] - (c == 0 ? 0.4 : 0.5)) < 1e-12 ? s - 1 : s - 2)
+          << ids[c] << ", interval from " << root.breaks[k];
+  }
 }
 
 }  // namespace

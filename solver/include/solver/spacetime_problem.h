@@ -243,8 +243,9 @@ class SpacetimeProblem {
 
   // Index of the character with this id (0 if none: ids are validated by the loader).
   int characterIndex(const std::string& id) const;
-  // The contacts (indices into contacts()) of character c active at t, interval ends included.
-  std::vector<int> activeContacts(int character, double t) const;
+  // The contacts (indices into contacts()) of character c active at t, interval ends included;
+  // with afterEnds, those ending at t left out (the flight side of a lift-off, Sample::after).
+  std::vector<int> activeContacts(int character, double t, bool afterEnds = false) const;
   // The maximal intervals of the clip in which character c touches nothing: the whole clip for
   // a character without contacts.
   std::vector<std::pair<double, double>> flightPhases(int character) const;
