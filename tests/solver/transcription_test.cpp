@@ -121,5 +121,25 @@ TEST(Transcription, EachCharacterHasItsOwnNodesWhereAFlightStarts) {
   }
 }
 
+// One lamp touches down at 0.8 s as the other lifts off: the lifting lamp gets the Radau nodes,
+// the landing one keeps Gauss nodes (its touch-down already has its own edge sample and impact).
+TEST(Transcription, ATouchDownAtAnotherCharactersLiftOffKeepsGaussNodes) {
+  const Scene first = testing::shippedScene("luxo_jump.json");
+  Scene second = testing::laterLamp(first);
+  for (TermSpec& t : second.terms)
+    if (t.kind == TermKind::Contact && t.start < 0.1) t.end = 0.8;
+  const Transcription tr = Transcription::fromScene(testing::together(first, second));
+  const int s = first.transcription.samplesPerSegment;
+  ASSERT_EQ(tr.flightStarts.size(), 2u);
+  EXPECT_NEAR(tr.flightStarts[1].time, 0.8, 1e-12);
+  EXPECT_EQ(tr.flightStarts[1].characters, std::vector<std::string>{"luxo2"});
+  for (const std::string id : {"luxo", "luxo2"}) {
+    int nodes = 0;
+    for (const Sample& smp : tr.samples)
+      nodes += smp.appliesTo(id) && smp.weight > 0 && smp.time >= 0.8 - 1e-12 && smp.time < 0.85 - 1e-12;
+    EXPECT_EQ(nodes, id == "luxo2" ? s + 1 : s) << id;
+  }
+}
+
 }  // namespace
 }  // namespace spacetime
