@@ -9,17 +9,16 @@
 
 namespace spacetime::testing {
 
-inline Scene shippedScene(const std::string& name) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/" + name);
+// Loads `name` from a folder of the source tree.
+inline Scene sceneIn(const std::string& folder, const std::string& name) {
+  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/" + folder + "/" + name);
   if (!r.scene) throw std::runtime_error(r.error);
   return *r.scene;
 }
 
+inline Scene shippedScene(const std::string& name) { return sceneIn("resources/scenes", name); }
+
 // Loads a scene kept for tests only (tests/scenes/).
-inline Scene testScene(const std::string& name) {
-  const SceneLoadResult r = loadSceneFile(std::string(SPACETIME_SOURCE_DIR) + "/tests/scenes/" + name);
-  if (!r.scene) throw std::runtime_error(r.error);
-  return *r.scene;
-}
+inline Scene testScene(const std::string& name) { return sceneIn("tests/scenes", name); }
 
 }  // namespace spacetime::testing

@@ -11,18 +11,28 @@ int segmentsFor(double t0, double t1, double rate) {
   return std::max(1, static_cast<int>(std::lround((t1 - t0) * rate)));
 }
 
-void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
-  // Golub-Welsch: the nodes are the eigenvalues of the Jacobi matrix of the Legendre
-  // recurrence, the weights 2 v0^2 from the first components of its eigenvectors.
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+namespace {
+
+// Golub-Welsch: the nodes are the eigenvalues of a Jacobi matrix, the weights 2 v0^2 from the
+// first components of its eigenvectors.
+void golubWelsch(const Eigen::MatrixXd& J, std::vector<double>* nodes, std::vector<double>* weights) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+  const int n = static_cast<int>(J.rows());
   nodes->resize(n);
   weights->resize(n);
   for (int i = 0; i < n; ++i) {
     (*nodes)[i] = es.eigenvalues()[i];
     (*weights)[i] = 2 * es.eigenvectors()(0, i) * es.eigenvectors()(0, i);
   }
+}
+
+}  // namespace
+
+void gaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
+  // The Jacobi matrix of the Legendre recurrence: zero diagonal, k / sqrt(4k^2 - 1) beside it.
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1);
+  golubWelsch(J, nodes, weights);
 }
 
 void gaussRadau(int n, std::vector<double>* nodes, std::vector<double>* weights) {
@@ -41,11 +51,7 @@ void gaussRadau(int n, std::vector<double>* nodes, std::vector<double>* weights)
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
   for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = std::sqrt(b(k));
   J(n - 1, n - 1) = -1 - b(n - 1) * p[n - 2] / p[n - 1];
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
-  for (int i = 0; i < n; ++i) {
-    (*nodes)[i] = es.eigenvalues()[i];
-    (*weights)[i] = 2 * es.eigenvectors()(0, i) * es.eigenvectors()(0, i);
-  }
+  golubWelsch(J, nodes, weights);
   (*nodes)[0] = -1;  // exactly
 }
 
