@@ -70,14 +70,14 @@ bool SpacetimeProblem::physicsAt(int character, const Sample& s) const {
   // ends there. On another character in flight the instant is a root breakpoint whose intervals
   // already meet physics at their own nodes, and one more row over-determines the root there:
   // two lamps lifting off 0.1 s apart stalled at violation 3e-7 after 100 multiplier updates,
-  // the worst row the second lamp's physics next to the first one's touch-down. (The scene's
-  // nominal edges: free contact ends move, their samples with them.)
+  // the worst row the second lamp's physics next to the first one's touch-down. The problem's
+  // contacts, not the scene's: a free end moves its contact's edge and the edge's sample together
+  // (syncFreeEnds), and the validity report asks after the solve.
   if (std::abs(s.time - scene_.startTime) < kTimeTolerance || std::abs(s.time - scene_.endTime) < kTimeTolerance)
     return true;
-  const std::string& id = scene_.characters[character].id;
-  return std::any_of(scene_.terms.begin(), scene_.terms.end(), [&](const TermSpec& t) {
-    return t.enabled && t.kind == TermKind::Contact && t.character == id &&
-           (std::abs(t.start - s.time) < kTimeTolerance || std::abs(t.end - s.time) < kTimeTolerance);
+  return std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
+    return ct.character == character &&
+           (std::abs(ct.start - s.time) < kTimeTolerance || std::abs(ct.end - s.time) < kTimeTolerance);
   });
 }
 

@@ -35,6 +35,15 @@ TEST(FreeEnd, MovesEveryTimeOfItsWindowConsistently) {
   EXPECT_LT(e.left, e.lower);
   EXPECT_LT(e.upper, e.right);
   const double duration = problem->scene().endTime - problem->scene().startTime;
+  // Which samples carry physics, decided when the problem was built; the validity report asks
+  // the same question after the times have moved.
+  auto physicsSamples = [&] {
+    std::vector<size_t> at;
+    for (size_t i = 0; i < problem->transcription().samples.size(); ++i)
+      if (problem->physicsAt(0, problem->transcription().samples[i])) at.push_back(i);
+    return at;
+  };
+  const std::vector<size_t> imposed = physicsSamples();
   for (double T : {e.lower, 0.37, e.upper, 0.4}) {
     const std::vector<Sample> before = problem->transcription().samples;
     const double was = problem->freeEnds()[0].current;
@@ -60,6 +69,8 @@ TEST(FreeEnd, MovesEveryTimeOfItsWindowConsistently) {
     EXPECT_EQ(problem->flightPhases(0).front().first, takeoff.end);
     const std::vector<double>& breaks = problem->characters()[0].groups[1].breaks;
     EXPECT_EQ(std::count_if(breaks.begin(), breaks.end(), [&](double b) { return std::abs(b - T) < 1e-12; }), 1);
+    // The lift-off's edge sample moved with T and still carries physics.
+    EXPECT_EQ(physicsSamples(), imposed) << T;
   }
 }
 
