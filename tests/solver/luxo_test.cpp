@@ -40,7 +40,9 @@ ValidityReport expectJumpAtTheSamples(const SpacetimeProblem& problem, const Sol
   const ValidityReport v = checkValidity(problem);
   EXPECT_LT(v.maxUnactuatedResidualSamples, 1e-6);
   EXPECT_EQ(v.flights.size(), 1u);
-  if (!v.flights.empty()) EXPECT_GE(v.flights[0].maxRootLift, 0.05);
+  if (!v.flights.empty()) {
+    EXPECT_GE(v.flights[0].maxRootLift, 0.05);
+  }
   EXPECT_TRUE(v.contactsPushOnly);
   EXPECT_TRUE(v.contactsInFrictionCone);
   return v;
@@ -281,7 +283,7 @@ bool exactAdmissibleForceExists(const SpacetimeProblem& problem, double t, int j
   const double slack = 1e-6 * problem.characters()[0].weight;
   double lo = -1e300, hi = 1e300;
   for (int p = 0; p < points; ++p)
-    for (const Eigen::Vector2d c : {Eigen::Vector2d(0, 1), Eigen::Vector2d(-1, ct.friction), Eigen::Vector2d(1, ct.friction)}) {
+    for (const Eigen::Vector2d& c : {Eigen::Vector2d(0, 1), Eigen::Vector2d(-1, ct.friction), Eigen::Vector2d(1, ct.friction)}) {
       // a + s b >= -slack, the slack being the solver's own feasibility tolerance.
       const double a = c.dot(f0.segment<2>(2 * p)) + slack, b = c.dot(n.segment<2>(2 * p));
       if (std::abs(b) < 1e-12) {
@@ -321,8 +323,12 @@ TEST(Luxo, GroundForcesBalanceTheContactPhasesBetweenSamples) {
       EXPECT_LE(rr, ri + 1e-8) << "t = " << t;
       // Both ways: a residual only where no admissible force exists, none where one does.
       const bool exists = exactAdmissibleForceExists(*problem, t, static_cast<int>(j));
-      if (rr > 1e-5) EXPECT_FALSE(exists) << "t = " << t;
-      if (rr < 1e-8) EXPECT_TRUE(exists) << "t = " << t;
+      if (rr > 1e-5) {
+        EXPECT_FALSE(exists) << "t = " << t;
+      }
+      if (rr < 1e-8) {
+        EXPECT_TRUE(exists) << "t = " << t;
+      }
       unexplained += rr > 1e-5;
       worstInterpolated = std::max(worstInterpolated, ri);
       worstRecovered = std::max(worstRecovered, rr);
@@ -330,8 +336,9 @@ TEST(Luxo, GroundForcesBalanceTheContactPhasesBetweenSamples) {
         const Eigen::Vector3d& f = recovered[j][p];
         EXPECT_GE(f.y(), -1e-12);
         EXPECT_LE(std::abs(f.x()), ct.friction * f.y() + 1e-9);
-        if (ct.sampleIndex(t) >= 0)
+        if (ct.sampleIndex(t) >= 0) {
           EXPECT_LT((f - interpolated[j][p]).norm(), 1e-6 * cv.weight) << "sample " << t;
+        }
       }
       ++checked;
     }
