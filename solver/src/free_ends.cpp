@@ -22,11 +22,16 @@ double FreeEnd::rate(double t0, double from) const {
   return t0 < from ? (t0 - left) / (from - left) : (right - t0) / (right - from);
 }
 
-TimeRef SpacetimeProblem::timeRef(int c, double t) const {
+TimeRef SpacetimeProblem::timeRef(int c, double t, Side side) const {
   TimeRef r;
   r.time = t;
+  r.rootSide = side;
   const DofGroup* g = rootGroup(c);
-  const int k = g ? hermiteInterval(c, *g, t, Side::Contacts) : -1;
+  // A flight's first instant at a window's end reads the flight's interval: if that lies outside
+  // the window the time is fixed. (Judged on the stance side it moved, and read the stance's
+  // interval: a lamp lifting off at another lamp's free-end window's end left its first flight
+  // interval one row short - 332 x weight between the samples.)
+  const int k = g ? hermiteInterval(c, *g, t, side) : -1;
   for (size_t i = 0; i < freeEnds_.size(); ++i) {
     const FreeEnd& e = freeEnds_[i];
     if (t < e.left - kTimeTolerance || t > e.right + kTimeTolerance) continue;

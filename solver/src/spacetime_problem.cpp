@@ -358,10 +358,9 @@ void SpacetimeProblem::addResidualAt(std::shared_ptr<const Kernel> kernel, int e
 SpacetimeProblem::SampleInputs SpacetimeProblem::sampleInputs(int c, double t, bool after) const {
   SampleInputs s;
   s.character = c;
-  s.ref = timeRef(c, t);
   // The first instant of a flight (Sample::after): the interval that starts at t, without the
   // contacts that end at t.
-  if (after) s.ref.rootSide = Side::After;
+  s.ref = timeRef(c, t, after ? Side::After : Side::Contacts);
   s.active = activeContacts(c, t, after);
   for (int j : s.active) s.forces.push_back(contacts_[j].interpolation(t));
   return s;

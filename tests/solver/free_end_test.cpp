@@ -7,8 +7,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <utility>
 
 #include "../shipped_scene.h"
+#include "staggered_lamps.h"
 #include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/validity.h"
@@ -168,6 +171,40 @@ TEST(FreeEnd, LuxoChoosesItsLiftOffAndSpendsLessEffort) {
       EXPECT_TRUE(track.freeEnd);
       EXPECT_EQ(track.end, liftOff);
     }
+}
+
+// A second lamp lifting off (at a fixed 0.42 s) where the first lamp's free take-off window
+// ends: the second lamp's first flight instant reads its flight's interval, which lies outside
+// the window, so it stays put while the window's times move. Before, it was judged on the stance
+// side, moved with the window and read the stance's interval: the solve stopped after 100
+// multiplier updates with 332 x weight unexplained between the samples right after 0.42 s.
+TEST(FreeEnd, AnotherLampLiftingOffAtTheWindowsEndStaysPhysical) {
+  const Scene jump = testing::shippedScene("luxo_jump.json");
+  Scene second = testing::laterLamp(jump);
+  for (TermSpec& t : second.terms) {
+    if (t.kind == TermKind::Contact && t.start < 0.1) t.end = 0.42;
+    else if (t.kind == TermKind::Contact) t.start = 0.82;
+    else if (t.kind == TermKind::Clearance) std::tie(t.start, t.end) = std::pair(0.42, 0.82);
+  }
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::together(freeTakeOff(jump), second), &error);
+  ASSERT_TRUE(problem) << error;
+  ASSERT_EQ(problem->freeEnds().size(), 1u);
+  EXPECT_NEAR(problem->freeEnds()[0].right, 0.42, 1e-12);  // the second lift-off ends the window
+  SolverOptions options = solverOptionsFor(jump.solver);
+  options.threads = 2;
+  const SolverSummary summary = solveSpacetime(*problem, options);
+  ASSERT_TRUE(summary.converged) << summary.reason << " worst " << summary.worstConstraint;
+  const double liftOff = problem->variables()[problem->freeEnds()[0].offset];
+  EXPECT_GT(std::abs(liftOff - 0.4), 1e-3);  // the first lamp chose its own instant
+  for (const ContactVariables& ct : problem->contacts())
+    if (problem->scene().terms[ct.term].id == "takeoff_2") {
+      EXPECT_EQ(ct.end, 0.42);
+    }
+  const ValidityReport v = checkValidity(*problem);
+  ASSERT_EQ(v.flights.size(), 2u);
+  for (const ValidityCheck& c : validityChecklist(v))
+    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " " << c.unit << " (limit " << c.limit << ")";
 }
 
 }  // namespace

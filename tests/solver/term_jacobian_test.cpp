@@ -88,7 +88,9 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
   EXPECT_GT(checked, luxo ? 5000 : 500);
   EXPECT_GE(kinds.size(), luxo ? 7u : 2u);
   // The lift-off instant's column: every kind of term in the window depends on it.
-  if (variant == "free") EXPECT_GT(movingChecked, 50);
+  if (variant == "free") {
+    EXPECT_GT(movingChecked, 50);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, TermJacobians,

@@ -57,7 +57,9 @@ TEST(Transcription, AFlightStartGetsRadauNodesAndTheRootABubble) {
     if (smp.weight > 0 && smp.time >= 0.4 - 1e-12 && smp.time < 0.45 - 1e-12) {
       ++inside;
       weight += smp.weight;
-      if (std::abs(smp.time - 0.4) < 1e-12) EXPECT_TRUE(smp.after);
+      if (std::abs(smp.time - 0.4) < 1e-12) {
+        EXPECT_TRUE(smp.after);
+      }
     }
   }
   EXPECT_EQ(after, 1);

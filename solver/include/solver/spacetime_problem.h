@@ -272,7 +272,9 @@ class SpacetimeProblem {
   using Fill = std::function<void(InputMap&, double T)>;
   void addResidualAt(std::shared_ptr<const Kernel> kernel, int event, const Fill& fill);
   // The time reference of t for character c (see TimeRef): moving inside a free end's window.
-  TimeRef timeRef(int character, double t) const;
+  // The root interval is the one `side` picks at a breakpoint (Side::After: a flight's first
+  // instant reads the interval that starts there).
+  TimeRef timeRef(int character, double t, Side side = Side::Contacts) const;
   // Input map helpers: append z rows for a character's q^(order)(t), a contact's forces at t,
   // the anchors.
   void addMotionInputs(InputMap& in, int character, double t, int order, Side side = Side::Contacts);
