@@ -37,7 +37,7 @@ MainWindow* solvedWindow(const QString& scene) {
   w->solveOnOpen = false;
   w->resize(1600, 1000);
   w->show();
-  QTest::qWaitForWindowExposed(w);
+  if (!QTest::qWaitForWindowExposed(w)) qFatal("the editor window was never shown");
   QString error;
   if (!w->openFile(scene, &error)) qFatal("%s", qPrintable(error));
   w->solve();

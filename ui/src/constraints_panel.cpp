@@ -45,7 +45,7 @@ ConstraintsPanel::ConstraintsPanel(Document* doc, QWidget* parent) : QWidget(par
   add->setPopupMode(QToolButton::InstantPopup);
   auto* menu = new QMenu(add);
   menu->addAction(tr("Pin the selected body here"), this, [this] { addPin(); });
-  menu->addAction(tr("Key the current pose"), this, [this] { keyCurrentPose(); }, QKeySequence(Qt::Key_K));
+  menu->addAction(tr("Key the current pose"), QKeySequence(Qt::Key_K), this, [this] { keyCurrentPose(); });
   menu->addAction(tr("Rest"), this, [this] { addRest(); });
   menu->addAction(tr("Contact"), this, [this] { addContact(); });
   menu->addAction(tr("Clearance"), this, [this] { addClearance(); });
