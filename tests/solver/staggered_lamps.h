@@ -11,16 +11,16 @@
 namespace spacetime::testing {
 
 // luxo_jump's scene (`first`) with its lamp renamed luxo2 and its contacts and clearances moved
-// 0.1 s later: it takes off at 0.5 s and lands at 0.9 s.
-inline Scene laterLamp(const Scene& first) {
+// later: by default 0.1 s, so that it takes off at 0.5 s and lands at 0.9 s.
+inline Scene laterLamp(const Scene& first, double takeOff = 0.5, double landing = 0.9) {
   Scene second = first;
   second.characters[0].id = "luxo2";
   for (TermSpec& t : second.terms) {
     t.id += "_2";
     t.character = "luxo2";
-    if (t.kind == TermKind::Contact && t.start < 0.1) t.end = 0.5;  // takes off later
-    else if (t.kind == TermKind::Contact) t.start = 0.9;            // lands later
-    else if (t.kind == TermKind::Clearance) std::tie(t.start, t.end) = std::pair(0.5, 0.9);
+    if (t.kind == TermKind::Contact && t.start < 0.1) t.end = takeOff;
+    else if (t.kind == TermKind::Contact) t.start = landing;
+    else if (t.kind == TermKind::Clearance) std::tie(t.start, t.end) = std::pair(takeOff, landing);
   }
   return second;
 }

@@ -142,7 +142,7 @@ struct TimeRef {
   int interval = -1;      // root interval holding it (event refs of floating characters)
   double intervalStart = 0, intervalEnd = 0;  // its ends when T = eventTime
   int side = 0;           // -1: in [left, T), +1: in (T, right], 0: at T
-  Side rootSide = Side::Contacts;  // the root interval read at a breakpoint (fixed times only)
+  Side rootSide = Side::Contacts;  // the root interval read at a breakpoint (it also chose `interval`)
   double at(double T) const { return event < 0 ? time : time + rate * (T - eventTime); }
 };
 
