@@ -98,7 +98,7 @@ struct RawRows {
 
 class RawEvaluator {
  public:
-  RawEvaluator(SpacetimeProblem& problem, const Variables& vars, int threads) : problem_(problem), vars_(vars) {
+  RawEvaluator(SpacetimeProblem& problem, const Variables& vars, int threads) : problem_(problem) {
     options_.parameter_blocks = vars.blocks;
     options_.num_threads = threads;
     problem.ceresProblem().GetResidualBlocks(&options_.residual_blocks);
@@ -109,6 +109,11 @@ class RawEvaluator {
       for (size_t i = 0; i < kinds.size(); ++i) {
         kind_.push_back(kinds[i]);
         multiplier_.push_back(terms_.back()->firstMultiplier() + static_cast<int>(i));
+      }
+      std::vector<int>& col = columns_.emplace_back();
+      for (const double* b : terms_.back()->blocks()) {
+        const std::vector<int>& c = vars.columns.at(b);
+        col.insert(col.end(), c.begin(), c.end());
       }
     }
   }
@@ -132,12 +137,14 @@ class RawEvaluator {
     out->values = Eigen::Map<const Vec>(values.data(), static_cast<Eigen::Index>(values.size()));
     if (!out->values.allFinite()) return false;
     if (jacobian) {
-      out->jacobian = SpRow(J.num_rows, J.num_cols);
-      Triplets t;
-      t.reserve(J.values.size());
-      for (int r = 0; r < J.num_rows; ++r)
-        for (int k = J.rows[r]; k < J.rows[r + 1]; ++k) t.emplace_back(r, J.cols[k], J.values[k]);
-      out->jacobian.setFromTriplets(t.begin(), t.end());
+      // Ceres's CRS arrays are Eigen's compressed row storage; copied as they are unless a row's
+      // columns are out of order (Eigen's algorithms expect them sorted).
+      const Eigen::Map<const SpRow> crs(J.num_rows, J.num_cols, static_cast<Eigen::Index>(J.values.size()),
+                                        J.rows.data(), J.cols.data(), J.values.data());
+      bool sorted = true;
+      for (int r = 0; r < J.num_rows && sorted; ++r)
+        sorted = std::is_sorted(J.cols.begin() + J.rows[r], J.cols.begin() + J.rows[r + 1]);
+      out->jacobian = sorted ? SpRow(crs) : SpRow(SpMat(crs));  // via column-major: sorted
     }
     return true;
   }
@@ -151,11 +158,7 @@ class RawEvaluator {
         const TermResidual* term = terms_[k];
         if (term->kernel().nonlinearInputs() == 0) continue;
         const Eigen::MatrixXd H = term->weightedHessianNow(w.data() + firstRow_[k]);
-        std::vector<int> col;
-        for (const double* b : term->blocks()) {
-          const std::vector<int>& c = vars_.columns.at(b);
-          col.insert(col.end(), c.begin(), c.end());
-        }
+        const std::vector<int>& col = columns_[k];
         for (int i = 0; i < H.rows(); ++i)
           for (int j = 0; j < H.cols(); ++j)
             if (col[i] >= 0 && col[j] >= 0 && col[i] >= col[j] && H(i, j) != 0)
@@ -173,10 +176,10 @@ class RawEvaluator {
 
  private:
   SpacetimeProblem& problem_;
-  const Variables& vars_;
   ceres::Problem::EvaluateOptions options_;
   std::vector<const TermResidual*> terms_;
   std::vector<int> firstRow_;
+  std::vector<std::vector<int>> columns_;  // each term's tangent column per stacked input (-1: constant)
   std::vector<RowKind> kind_;
   std::vector<int> multiplier_;
 };
@@ -222,12 +225,17 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     held[r] = 1;
     multipliers[r] = estimate;
   }
-  auto select = [](const SpRow& J, const std::vector<int>& which) {
-    SpRow S(static_cast<Eigen::Index>(which.size()), J.rows());
-    Triplets t;
-    for (size_t i = 0; i < which.size(); ++i) t.emplace_back(static_cast<int>(i), which[i], 1.0);
-    S.setFromTriplets(t.begin(), t.end());
-    return SpRow(S * J);
+  auto select = [](const SpRow& J, const std::vector<int>& which) {  // the rows `which` of J
+    Eigen::Index nonzeros = 0;
+    for (int row : which) nonzeros += J.outerIndexPtr()[row + 1] - J.outerIndexPtr()[row];
+    SpRow S(static_cast<Eigen::Index>(which.size()), J.cols());
+    S.reserve(nonzeros);
+    for (size_t i = 0; i < which.size(); ++i) {
+      S.startVec(static_cast<Eigen::Index>(i));
+      for (SpRow::InnerIterator e(J, which[i]); e; ++e) S.insertBack(static_cast<Eigen::Index>(i), e.col()) = e.value();
+    }
+    S.finalize();
+    return S;
   };
   auto pick = [](const Vec& v, const std::vector<int>& which) {
     Vec out(static_cast<Eigen::Index>(which.size()));

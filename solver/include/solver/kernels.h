@@ -129,6 +129,7 @@ class BodyRestKernel : public Kernel {
  public:
   BodyRestKernel(std::shared_ptr<const Model<double>> model, int body, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return model_->dofCount(); }  // v = J(q) qd: q only
 
  private:
   std::shared_ptr<const Model<double>> model_;
@@ -173,6 +174,8 @@ class ContactPointMotionKernel : public Kernel {
   ContactPointMotionKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
                            int forceDims, int order, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  // Velocity J(q) qd is linear in qd; acceleration J(q) qdd + Jdot(q, qd) qd linear in qdd.
+  int nonlinearInputs() const override { return order_ * model_->dofCount(); }
 
  private:
   std::shared_ptr<const Model<double>> model_;
@@ -212,7 +215,8 @@ class ImpactKernel : public Kernel {
   ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
                int forceDims, double impulseScale, double torqueWeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
-  int nonlinearInputs() const override { return 4 * model_->dofCount(); }  // not impulses
+  // q- and q+: the velocities enter linearly (M(q-) (qd+ - qd-), J(q+) qd+), so do impulses.
+  int nonlinearInputs() const override { return 2 * model_->dofCount(); }
   // The rows' parts: root continuity, root impulse balance, impulsive joint torques, and the
   // contact points' velocity after the impact.
   enum class Part { Continuity, Balance, JointImpulse, PostVelocity };
@@ -253,6 +257,7 @@ class JointLimitKernel : public Kernel {
  public:
   JointLimitKernel(std::shared_ptr<const Model<double>> model, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 0; }  // linear rows
 
  private:
   std::shared_ptr<const Model<double>> model_;
