@@ -9,12 +9,12 @@
 namespace spacetime {
 
 Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t,
-                                    const GroundForces* ground) {
+                                    const GroundForces* ground, Side side) {
   const Model<double>& model = *problem.characters()[c].model;
-  const Eigen::VectorXd q = problem.jointState(c, t, 0), qd = problem.jointState(c, t, 1),
-                        qdd = problem.jointState(c, t, 2);
+  const Eigen::VectorXd q = problem.jointStateOnSide(c, t, 0, side), qd = problem.jointStateOnSide(c, t, 1, side),
+                        qdd = problem.jointStateOnSide(c, t, 2, side);
   Data<double> data(model);
-  return rnea(model, data, q.data(), qd.data(), qdd.data(), groundPointForcesAt(problem, c, t, ground));
+  return rnea(model, data, q.data(), qd.data(), qdd.data(), groundPointForcesAt(problem, c, t, ground, side));
 }
 
 Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {

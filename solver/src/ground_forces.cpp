@@ -38,11 +38,11 @@ PointForce<double> pointForce(const ContactVariables& ct, size_t p, const Eigen:
 
 }  // namespace
 
-GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t) {
+GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Side side) {
   GroundForces out(problem.contacts().size());
   for (size_t j = 0; j < out.size(); ++j)
     out[j].assign(problem.contacts()[j].points.points.size(), Eigen::Vector3d::Zero());
-  const std::vector<int> active = problem.activeContacts(c, t);
+  const std::vector<int> active = problem.activeContacts(c, t, side == Side::After);
   if (active.empty()) return out;
 
   const CharacterVariables& cv = problem.characters()[c];
@@ -68,8 +68,8 @@ GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t) {
     for (size_t p = 0; p < ct.points.points.size(); ++p, ++pointCount)
       for (const Eigen::Vector3d& e : coneEdges(ct.friction, ct.forceDims)) columns.push_back({j, p, e});
   }
-  const Eigen::VectorXd q = problem.jointState(c, t, 0), qd = problem.jointState(c, t, 1),
-                        qdd = problem.jointState(c, t, 2);
+  const Eigen::VectorXd q = problem.jointStateOnSide(c, t, 0, side), qd = problem.jointStateOnSide(c, t, 1, side),
+                        qdd = problem.jointStateOnSide(c, t, 2, side);
   Data<double> data(model);
   const Eigen::VectorXd tau = rnea(model, data, q.data(), qd.data(), qdd.data(), {});
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
@@ -104,11 +104,11 @@ GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t) {
 }
 
 std::vector<PointForce<double>> groundPointForcesAt(const SpacetimeProblem& problem, int c,
-                                                    double t, const GroundForces* forces) {
+                                                    double t, const GroundForces* forces, Side side) {
   GroundForces computed;
-  const GroundForces& f = forces ? *forces : (computed = groundForcesAt(problem, c, t));
+  const GroundForces& f = forces ? *forces : (computed = groundForcesAt(problem, c, t, side));
   std::vector<PointForce<double>> out;
-  for (int j : problem.activeContacts(c, t))
+  for (int j : problem.activeContacts(c, t, side == Side::After))
     for (size_t p = 0; p < f[j].size(); ++p) out.push_back(pointForce(problem.contacts()[j], p, f[j][p]));
   return out;
 }

@@ -15,9 +15,10 @@
 namespace spacetime {
 namespace {
 
-double unactuatedResidual(const SpacetimeProblem& problem, int c, double t, const GroundForces& ground) {
+double unactuatedResidual(const SpacetimeProblem& problem, int c, double t, const GroundForces& ground,
+                          Side side = Side::Contacts) {
   const CharacterVariables& cv = problem.characters()[c];
-  const Eigen::VectorXd tau = generalizedForcesAt(problem, c, t, &ground);
+  const Eigen::VectorXd tau = generalizedForcesAt(problem, c, t, &ground, side);
   double worst = 0;
   for (int d = 0; d < cv.dofs; ++d)
     if (!cv.model->bodies[cv.model->dofBody[d]].actuated) worst = std::max(worst, std::abs(tau[d]));
@@ -117,6 +118,11 @@ ImpactCheck checkImpact(const SpacetimeProblem& problem, int j) {
 
 }  // namespace
 
+double sampleUnactuatedResidual(const SpacetimeProblem& problem, int c, const Sample& s) {
+  const Side side = s.after ? Side::After : Side::Contacts;
+  return unactuatedResidual(problem, c, s.time, groundForcesAt(problem, c, s.time, side), side);
+}
+
 ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
   ValidityReport r;
   r.denseFactor = denseFactor;
@@ -136,8 +142,10 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
     const int ci = static_cast<int>(c);
     for (const Sample& s : tr.samples)
       if (problem.physicsAt(ci, s))
-        r.maxUnactuatedResidualSamples = std::max(r.maxUnactuatedResidualSamples,
-                                                unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time)));
+        r.maxUnactuatedResidualSamples =
+            std::max(r.maxUnactuatedResidualSamples,
+                     s.after ? sampleUnactuatedResidual(problem, ci, s)
+                             : unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time)));
     // The dense grid, ten times finer again over the grid step on each side of every contact's
     // start and end, where the root's acceleration and the ground force jump. Before the flight
     // was collocated from its first instant (Sample::after), luxo_jump's residual was 0 at the

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <random>
+#include <sstream>
 #include <tuple>
 
 #include "../shipped_scene.h"
@@ -115,6 +116,42 @@ TEST(LuxoValidity, FlagsAContactVariableThatPulls) {
   EXPECT_GT(v.maxConeViolation, 0.0);
   for (const std::vector<Eigen::Vector3d>& f : groundForcesAt(*problem, 0, ct.times[sample]))
     for (const Eigen::Vector3d& p : f) EXPECT_GE(p.y(), 0.0);
+}
+
+// At a flight's first instant (Sample::after) the problem imposes physics with the flight
+// interval's motion and no ground: the report's residual there must be that one, the residual
+// of the solver's own dynamics row - not the stance side's, which differs at any motion whose
+// root acceleration jumps at the lift-off (here a perturbed default guess).
+TEST(LuxoValidity, ReadsAFlightsFirstInstantOnTheFlightSide) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(luxoScene(), &error);
+  ASSERT_TRUE(problem) << error;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (double& x : problem->variables()) x += noise(rng);
+  const Sample* first = nullptr;
+  for (const Sample& s : problem->transcription().samples)
+    if (s.after && problem->physicsAt(0, s)) first = &s;
+  ASSERT_NE(first, nullptr);
+  // Its dynamics row: of the residuals at that instant, the one without contact forces (the
+  // stance side's edge sample carries the take-off's forces).
+  std::ostringstream label;
+  label << "dynamics luxo t=" << first->time;
+  const TermResidual* row = nullptr;
+  for (const TermResidual* res : problem->residuals())
+    if (res->kernel().label() == label.str() &&
+        (!row || res->kernel().inputSize() < row->kernel().inputSize()))
+      row = res;
+  ASSERT_NE(row, nullptr) << label.str();
+  const std::vector<double> rows = row->rawRowsNow();
+  double physics = 0;  // the equality rows: unactuated forces / weight
+  for (size_t r = 0; r < rows.size(); ++r)
+    if (row->kernel().rowKinds()[r] == RowKind::Equality) physics = std::max(physics, std::abs(rows[r]));
+  const double reported = sampleUnactuatedResidual(*problem, 0, *first);
+  EXPECT_NEAR(reported, physics, 1e-9 * (1 + physics));
+  Sample stanceSide = *first;
+  stanceSide.after = false;
+  EXPECT_GT(std::abs(sampleUnactuatedResidual(*problem, 0, stanceSide) - physics), 1e-3 * physics);
 }
 
 // A clearance the motion breaks is reported with its term and the dense-grid instant of its

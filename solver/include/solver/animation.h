@@ -48,8 +48,8 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
 
 // The generalized forces of character c at time t from the solution's motion and contact
 // forces (RNEA with the contacts as external point forces); `ground` is groundForcesAt(problem,
-// c, t) if the caller has it already.
+// c, t, side) if the caller has it already. Side::After: the flight side of a lift-off at t.
 Eigen::VectorXd generalizedForcesAt(const SpacetimeProblem& problem, int c, double t,
-                                    const GroundForces* ground = nullptr);
+                                    const GroundForces* ground = nullptr, Side side = Side::Contacts);
 
 }  // namespace spacetime

@@ -34,10 +34,13 @@ using GroundForces = std::vector<std::vector<Eigen::Vector3d>>;
 
 // Forces of every point of every contact of the problem (indexed like problem.contacts()) on
 // character c at time t: zero for contacts of other characters or not active at t.
-GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t);
+// Side::After: the flight side of a lift-off at t (Sample::after) - the motion of the interval
+// that starts at t, without the contacts that end there.
+GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Side side = Side::Contacts);
 
 // The same as point forces for RNEA; `forces` is groundForcesAt(problem, c, t) if given.
 std::vector<PointForce<double>> groundPointForcesAt(const SpacetimeProblem& problem, int c,
-                                                    double t, const GroundForces* forces = nullptr);
+                                                    double t, const GroundForces* forces = nullptr,
+                                                    Side side = Side::Contacts);
 
 }  // namespace spacetime

@@ -226,6 +226,9 @@ class SpacetimeProblem {
   Eigen::VectorXd jointState(int character, double t, int order) const;
   // q, qd of a character just before t: differs from jointState at an impact.
   Eigen::VectorXd jointStateBefore(int character, double t, int order) const;
+  // On a chosen side of t: Side::After reads the root interval that starts at t (the flight side
+  // of a lift-off, where the root's acceleration jumps), Side::Contacts is jointState.
+  Eigen::VectorXd jointStateOnSide(int character, double t, int order, Side side) const;
   // World force of each point of a contact at time t (zero outside its interval).
   std::vector<Eigen::Vector3d> contactForces(int contact, double t) const;
   // Whether contact j's points leave the ground at its end: it ends before the clip does and no
@@ -328,7 +331,6 @@ class SpacetimeProblem {
   // Sets a Hermite group's bubbles so that the group interpolates target(t) (a full joint
   // vector) at interior points of each interval, its breakpoint data already set.
   void fitBubbles(int character, const DofGroup& g, const std::function<Eigen::VectorXd(double)>& target);
-  Eigen::VectorXd jointStateOnSide(int character, double t, int order, Side side) const;
   // What a sample's inputs are made of, fixed when the problem is built: its time, the active
   // contacts and where their forces are read.
   struct SampleInputs {

@@ -79,6 +79,12 @@ struct ValidityReport {
 
 ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = 10);
 
+// The largest unactuated generalized force of character c at sample s (fraction of weight), on
+// the side the problem imposes physics there: a flight's first instant (Sample::after) with the
+// flight interval's motion and without the contacts ending at s.time. Ground forces are the
+// admissible ones that explain the most (groundForcesAt), not the solver's variables.
+double sampleUnactuatedResidual(const SpacetimeProblem& problem, int c, const Sample& s);
+
 // The report as a checklist for people: each check's value against its limit. The limits are
 // the engine issue's (1 % of weight on the dense grid, 1e-6 at the samples) and, where it names
 // none, tolerances well above the solver's and well below what an animator would see (0.1 mm,
