@@ -68,7 +68,7 @@ Transcription Transcription::fromScene(const Scene& scene) {
         if (e > t0 && e < t1) tr.breakpoints.push_back(e);
   std::sort(tr.breakpoints.begin(), tr.breakpoints.end());
   tr.breakpoints.erase(std::unique(tr.breakpoints.begin(), tr.breakpoints.end(),
-                                   [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+                                   [](double a, double b) { return std::abs(a - b) < kTimeTolerance; }),
                        tr.breakpoints.end());
   tr.breakpoints.back() = t1;
   std::vector<double> x, w, xr, wr;
@@ -83,8 +83,8 @@ Transcription Transcription::fromScene(const Scene& scene) {
       bool ends = false, stays = false;
       for (const TermSpec& t : scene.terms) {
         if (!t.enabled || t.kind != TermKind::Contact || t.character != c.id) continue;
-        if (std::abs(t.end - a) < 1e-9) (t.freeEnd ? stays : ends) = true;
-        if (std::abs(t.start - a) < 1e-9 || (t.start < b - 1e-9 && t.end > a + 1e-9)) stays = true;
+        if (std::abs(t.end - a) < kTimeTolerance) (t.freeEnd ? stays : ends) = true;
+        if (std::abs(t.start - a) < kTimeTolerance || (t.start < b - kTimeTolerance && t.end > a + kTimeTolerance)) stays = true;
       }
       if (ends && !stays) ids.push_back(c.id);
     }
@@ -128,7 +128,7 @@ Transcription Transcription::fromScene(const Scene& scene) {
   };
   auto present = [&](double t) {  // a sample read at t on its own contacts' side
     return std::any_of(tr.samples.begin(), tr.samples.end(),
-                       [&](const Sample& s) { return !s.after && std::abs(s.time - t) < 1e-9; });
+                       [&](const Sample& s) { return !s.after && std::abs(s.time - t) < kTimeTolerance; });
   };
   for (double e : extra)
     if (!present(e)) tr.samples.push_back(zeroWeight(e, false));
@@ -136,7 +136,7 @@ Transcription Transcription::fromScene(const Scene& scene) {
     if (t.enabled && t.kind == TermKind::Contact)
       for (int k = 1; k < tr.motion.segmentCount(); ++k) {
         const double knot = t0 + k * tr.motion.knotSpacing();
-        if (knot > t.start + 1e-9 && knot < t.end - 1e-9 && !present(knot)) tr.samples.push_back(zeroWeight(knot, true));
+        if (knot > t.start + kTimeTolerance && knot < t.end - kTimeTolerance && !present(knot)) tr.samples.push_back(zeroWeight(knot, true));
       }
   std::sort(tr.samples.begin(), tr.samples.end(),
             [](const Sample& a, const Sample& b) { return a.time < b.time; });
@@ -150,14 +150,14 @@ bool Sample::appliesTo(const std::string& character) const {
 
 bool Transcription::flightStartsAt(const std::string& id, double t) const {
   return std::any_of(flightStarts.begin(), flightStarts.end(), [&](const FlightStart& f) {
-    return std::abs(f.time - t) < 1e-9 && std::find(f.characters.begin(), f.characters.end(), id) != f.characters.end();
+    return std::abs(f.time - t) < kTimeTolerance && std::find(f.characters.begin(), f.characters.end(), id) != f.characters.end();
   });
 }
 
 std::vector<Sample> Transcription::samplesIn(double t0, double t1, const std::string* character) const {
   std::vector<Sample> out;
   for (const Sample& s : samples)
-    if (s.time >= t0 - 1e-9 && s.time <= t1 + 1e-9 && (!character || s.appliesTo(*character))) out.push_back(s);
+    if (s.time >= t0 - kTimeTolerance && s.time <= t1 + kTimeTolerance && (!character || s.appliesTo(*character))) out.push_back(s);
   return out;
 }
 

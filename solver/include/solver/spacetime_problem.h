@@ -52,9 +52,6 @@ namespace spacetime {
 // that starts at t (the flight just after a lift-off).
 enum class Side { Contacts, Before, After };
 
-// Two instants closer than this are the same (contact edges, samples, breakpoints).
-inline constexpr double kTimeTolerance = 1e-9;
-
 // Degrees of freedom are split in two groups.
 // - Actuated dofs: uniform cubic B-splines (C2) at the scene's control-point rate; their shape
 //   is what the animator sees and the smoothness term acts on.
@@ -112,14 +109,11 @@ struct DofGroup {
       bubbleStarts.push_back(at);
       at += bubbleBlockSize(k);
     }
+    bubbleValues = at - bubbleOffset;
   }
+  int bubbleValues = 0;  // Hermite: how many, set by layoutBubbles
   // All of the group's values: blocks, then (Hermite) bubbles.
-  int variableCount() const {
-    int bubbleValues = 0;
-    if (hermite)
-      for (int k = 0; k + 1 < blockCount(); ++k) bubbleValues += bubbleBlockSize(k);
-    return blockSize() * blockCount() + bubbleValues;
-  }
+  int variableCount() const { return blockSize() * blockCount() + bubbleValues; }
 };
 
 // The linear map from a group's parameter blocks to its dofs' derivative of some order at a

@@ -21,6 +21,9 @@
 
 namespace spacetime {
 
+// Two instants closer than this are the same (contact edges, samples, breakpoints).
+inline constexpr double kTimeTolerance = 1e-9;
+
 struct Sample {
   double time = 0;
   double weight = 0;  // quadrature weight (0 for the extra boundary samples)
