@@ -30,7 +30,8 @@ double unactuatedResidual(const SpacetimeProblem& problem, int c, double t, cons
 // open-loop simulation of an inconsistent motion can blow up (to 1e104 on a 3D lamp): it stops
 // at the first step that leaves the solution by more than FlightCheck::kDivergence or is not
 // finite, and says when.
-void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1, FlightCheck& check) {
+void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1, FlightCheck& check,
+                    const std::atomic<bool>* cancel) {
   const Model<double>& model = *problem.characters()[c].model;
   const int n = model.dofCount();
   Data<double> data(model);
@@ -49,6 +50,7 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
   Eigen::VectorXd q = problem.jointState(c, t0, 0), qd = problem.jointState(c, t0, 1);
   check.maxPositionError = 0;
   for (int s = 0; s < steps; ++s) {
+    if (cancel && cancel->load(std::memory_order_relaxed)) return;
     const double t = t0 + s * h;
     const Eigen::VectorXd k1v = qd, k1a = accel(t, q, qd);
     const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(t + 0.5 * h, q + 0.5 * h * k1v, k2v);
@@ -123,8 +125,9 @@ double sampleUnactuatedResidual(const SpacetimeProblem& problem, int c, const Sa
   return unactuatedResidual(problem, c, s.time, groundForcesAt(problem, c, s.time, side), side);
 }
 
-ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
+ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, const std::atomic<bool>* cancel) {
   ValidityReport r;
+  auto stopped = [&] { return r.cancelled = r.cancelled || (cancel && cancel->load(std::memory_order_relaxed)); };
   r.denseFactor = denseFactor;
   const Scene& scene = problem.scene();
   const Transcription& tr = problem.transcription();
@@ -162,6 +165,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
         }
     }
     for (double t : times) {
+      if (stopped()) return r;
       const double v = unactuatedResidual(problem, ci, t, groundAt(ci, t));
       if (v > r.maxUnactuatedResidualDense) {
         r.maxUnactuatedResidualDense = v;
@@ -170,6 +174,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
     }
   }
   for (const TermSpec& t : scene.terms) {
+    if (stopped()) return r;
     if (!t.enabled) continue;
     const int c = problem.characterIndex(t.character);
     const Model<double>& model = *problem.characters()[c].model;
@@ -212,6 +217,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
     }
   }
   for (size_t j = 0; j < problem.contacts().size(); ++j) {
+    if (stopped()) return r;
     const ContactVariables& ct = problem.contacts()[j];
     const Model<double>& model = *problem.characters()[ct.character].model;
     Data<double> data(model);
@@ -267,6 +273,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
   r.contactsInFrictionCone = r.maxConeViolation <= 1e-6;  // fraction of weight, as above
   // Formula constraints, evaluated by the same formula language the graph widget plots with.
   for (const TermSpec& term : scene.terms) {
+    if (stopped()) return r;
     if (term.kind != TermKind::Formula) continue;
     const CharacterSpec* spec = scene.character(term.character);
     if (!spec) continue;
@@ -311,7 +318,8 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor) {
       fc.character = model.name;
       fc.start = a;
       fc.end = b;
-      simulateFlight(problem, static_cast<int>(c), a, b, fc);
+      simulateFlight(problem, static_cast<int>(c), a, b, fc, cancel);
+      if (stopped()) return r;
       r.forwardSimulationDiverged = r.forwardSimulationDiverged || fc.diverged;
       for (double s : dense) {
         if (s < a || s > b) continue;

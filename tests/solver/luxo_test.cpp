@@ -154,6 +154,23 @@ TEST(LuxoValidity, ReadsAFlightsFirstInstantOnTheFlightSide) {
   EXPECT_GT(std::abs(sampleUnactuatedResidual(*problem, 0, stanceSide) - physics), 1e-3 * physics);
 }
 
+// A report stopped through its cancel flag says it is incomplete (the editor stops the report
+// of a motion an edit has replaced): nothing past the flag is checked, and a report run to the
+// end is not marked.
+TEST(LuxoValidity, ACancelledReportSaysItIsIncomplete) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(luxoScene(), &error);
+  ASSERT_TRUE(problem) << error;
+  const std::atomic<bool> stop{true}, go{false};
+  const ValidityReport cancelled = checkValidity(*problem, 10, &stop);
+  EXPECT_TRUE(cancelled.cancelled);
+  EXPECT_TRUE(cancelled.flights.empty());
+  const ValidityReport full = checkValidity(*problem, 10, &go);
+  EXPECT_FALSE(full.cancelled);
+  EXPECT_EQ(full.flights.size(), 1u);
+  EXPECT_GT(full.maxUnactuatedResidualDense, cancelled.maxUnactuatedResidualDense);
+}
+
 // A clearance the motion breaks is reported with its term and the dense-grid instant of its
 // deepest violation: the head held 1 m up over 0.5-0.6 s, which the default guess never reaches,
 // is violated by exactly 1 m minus the head's height at the reported instant, and at no instant

@@ -20,6 +20,8 @@ namespace spacetime::ui {
 struct SolverJob::Run {
   int generation = 0;
   std::atomic<bool> cancel{false};
+  // A newer run replaced this one: its results are dropped, so its validity report stops early.
+  std::atomic<bool> superseded{false};
   std::thread thread;
 };
 
@@ -60,6 +62,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
                       std::shared_ptr<const Scene> warmScene) {
   if (current_) {
     current_->cancel = true;
+    current_->superseded = true;
     current_->thread.detach();  // it ends on its own; its results carry an old generation
   }
   auto run = std::make_shared<Run>();
@@ -157,14 +160,18 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
     // The result is on screen now; its validity report (tens of milliseconds for a jump: the
     // dense grid and a forward simulation of every flight) follows as a `validated` signal.
     if (result) {
-      auto report = std::make_shared<const ValidityReport>(checkValidity(*problem));
+      // Once a newer run has replaced this one the report would be dropped; it stops then, rather
+      // than slow the new solve down beside it (dragging the Luxo end pose: each report ran next
+      // to the following solve on the 2 cores).
+      auto report = std::make_shared<const ValidityReport>(checkValidity(*problem, 10, &run->superseded));
       const int gen = run->generation;
-      QMetaObject::invokeMethod(
-          qApp,
-          [self, result, report, gen] {
-            if (self && gen == self->generation_) emit self->validated(result, report);
-          },
-          Qt::QueuedConnection);
+      if (!report->cancelled)
+        QMetaObject::invokeMethod(
+            qApp,
+            [self, result, report, gen] {
+              if (self && gen == self->generation_) emit self->validated(result, report);
+            },
+            Qt::QueuedConnection);
     }
     --alive_;  // after this the thread touches nothing of the job
   });

@@ -10,6 +10,7 @@
 // balance of every touch-down, and every formula constraint.
 #pragma once
 
+#include <atomic>
 #include <optional>
 #include <string>
 #include <vector>
@@ -75,9 +76,13 @@ struct ValidityReport {
   bool forwardSimulationDiverged = false;  // some flight's simulation diverged (see FlightCheck)
   bool contactsPushOnly = true;
   bool contactsInFrictionCone = true;
+  bool cancelled = false;  // stopped early through checkValidity's cancel flag: incomplete
 };
 
-ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = 10);
+// `cancel` (optional) stops the checks early: the report then has `cancelled` set and is
+// incomplete (the editor drops the report of a motion an edit has already replaced).
+ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = 10,
+                             const std::atomic<bool>* cancel = nullptr);
 
 // The largest unactuated generalized force of character c at sample s (fraction of weight), on
 // the side the problem imposes physics there: a flight's first instant (Sample::after) with the
