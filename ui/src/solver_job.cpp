@@ -111,7 +111,9 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
         if (previous && previous->restore(*warmStart))
           options.warmStart = problem->initializeFrom(*previous) > 0;
       }
-      {
+      // The starting motion, drawn at once - except for a warm start, where it is the motion
+      // already on screen, and redrawing it (a whole window under Xvfb) only delays the re-solve.
+      if (!options.warmStart) {
         auto first = sampleMotion(*problem);
         const ProblemMeasures m = measure(*problem);
         first->objective = m.objective;
