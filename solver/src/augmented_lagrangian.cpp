@@ -95,6 +95,8 @@ std::string SolverOptions::validate() const {
   if (!(tolerance > 0)) return "tolerance must be > 0";
   if (!(initialPenalty > 0) || !(maxPenalty >= initialPenalty)) return "penalties must satisfy 0 < initialPenalty <= maxPenalty";
   if (!(penaltyGrowth > 1)) return "penaltyGrowth must be > 1";
+  if (!(nearFeasible >= 0) || !(nearFeasiblePenalty >= initialPenalty))
+    return "nearFeasible must be >= 0 and nearFeasiblePenalty >= initialPenalty";
   if (!(maxSeconds > 0)) return "maxSeconds must be > 0";
   if (threads < 1) return "threads must be at least 1";
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
@@ -304,8 +306,9 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
         else if (kinds[i] == RowKind::Inequality) lambda = std::max(0.0, lambda + al.rho * rows[k][i]);
       }
     }
-    if (m.maxViolation > 0.25 * previousViolation)
-      al.rho = std::min(al.rho * options.penaltyGrowth, options.maxPenalty);
+    const double cap = m.maxViolation <= options.nearFeasible ? std::min(options.maxPenalty, options.nearFeasiblePenalty)
+                                                              : options.maxPenalty;
+    if (m.maxViolation > 0.25 * previousViolation && al.rho < cap) al.rho = std::min(al.rho * options.penaltyGrowth, cap);
     previousViolation = m.maxViolation;
   }
   // Constraint projection: land exactly on the constraints from the AL's near-optimal point.
