@@ -26,17 +26,12 @@ struct SolverOptions {
   double penaltyGrowth = 10;     // rho *= growth when the violation did not shrink enough
   double maxPenalty = SolverSpec{}.maxPenalty;  // see SolverSpec::maxPenalty
   // Once the violation is within nearFeasible, the penalty grows no further than
-  // nearFeasiblePenalty (nor maxPenalty): from there the multiplier updates close the gap, and a
-  // larger penalty only stiffens the inner solves, whose Gauss-Newton steps then crawl along the
-  // constraints. A penalty already above it stays. Measured where no polish ends the solve
-  // (Levenberg-Marquardt iterations, to the same optima or lower): the head-rooted lamp 3601 ->
-  // 1261; free lift-offs of the jump 1821 -> 1282, of the 3D lamp 3479 -> 2286, of the heavy lamp
-  // 5064 -> 3360, of the hurdle 1206 -> 926; the shipped scenes are polished before it matters
-  // (unchanged). With the polish switched off: the jump 674 -> 729, a warm 2 cm edit 434 -> 479,
-  // a warm 10 cm edit 604 -> 537. No growth at all below nearFeasible stalled at violations of
-  // 1e-7 - 1e-6 where the penalty was still 1e4 (the 2 cm edit without the polish: 962); a cap
-  // of 1e6: the head-rooted lamp 2144; nearFeasible 1e-3: the heavy lamp's free lift-off 0.02 %
-  // higher.
+  // nearFeasiblePenalty (nor maxPenalty; one already higher stays): from there the multiplier
+  // updates close the gap, and a larger penalty only stiffens the inner solves, whose
+  // Gauss-Newton steps then crawl along the constraints (the head-rooted lamp, which no polish
+  // ends: 3601 -> 1261 iterations; free lift-offs 30-35 % fewer; docs/STATUS.md, session 19).
+  // Without any growth below nearFeasible, solves stalled at violations of 1e-7 - 1e-6 with the
+  // penalty still at 1e4.
   double nearFeasible = 1e-4;
   double nearFeasiblePenalty = 1e5;
   double maxSeconds = 300;       // wall-clock budget of the whole solve, Newton polish included
