@@ -29,7 +29,7 @@ struct SolverOptions {
   // nearFeasiblePenalty (nor maxPenalty; one already higher stays): from there the multiplier
   // updates close the gap, and a larger penalty only stiffens the inner solves, whose
   // Gauss-Newton steps then crawl along the constraints (the head-rooted lamp, which no polish
-  // ends: 3601 -> 1261 iterations; free lift-offs 30-35 % fewer; docs/STATUS.md, session 19).
+  // ends: 3601 -> 1261 iterations; free lift-offs 23-35 % fewer; docs/STATUS.md, session 19).
   // Without any growth below nearFeasible, solves stalled at violations of 1e-7 - 1e-6 with the
   // penalty still at 1e4.
   double nearFeasible = 1e-4;
