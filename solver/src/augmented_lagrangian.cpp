@@ -97,6 +97,7 @@ std::string SolverOptions::validate() const {
   if (!(penaltyGrowth > 1)) return "penaltyGrowth must be > 1";
   if (!(nearFeasible >= 0) || !(nearFeasiblePenalty >= initialPenalty))
     return "nearFeasible must be >= 0 and nearFeasiblePenalty >= initialPenalty";
+  if (!(warmRestartPenalty > 0)) return "warmRestartPenalty must be > 0";
   if (!(maxSeconds > 0)) return "maxSeconds must be > 0";
   if (threads < 1) return "threads must be at least 1";
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
@@ -238,11 +239,11 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // 606 LM iterations). If they fail, the outer loop starts as it would have.
   const bool polishedWarm = options.newtonPolish && options.warmStart && !freeEndsHeld && polish();
   // A warm start far from feasible (a large edit the Newton steps could not finish) keeps its
-  // multipliers but restarts the penalty: the old one was grown for a violation near zero, and at
-  // 1e7 the inner problems are stiff (luxo_jump, end pose moved 10 cm: 844 LM iterations, 14.8 s
-  // with the old penalty; 360, 5.4 s restarted).
+  // multipliers but restarts the penalty (at warmRestartPenalty): the old one was grown for a
+  // violation near zero, and at 1e7 the inner problems are stiff (luxo_jump, end pose moved 10 cm:
+  // 844 LM iterations, 14.8 s with the old penalty; 360, 5.4 s restarted at 100; 240 at 1e4).
   if (!polishedWarm && options.warmStart && m.maxViolation > options.polishBelow)
-    al.rho = std::min(al.rho, options.initialPenalty);
+    al.rho = std::min(al.rho, std::min(options.warmRestartPenalty, options.maxPenalty));
   for (int outer = 0; !polishedWarm && outer < options.maxOuterIterations; ++outer) {
     forwarder.outer = outer;
     forwarder.rho = al.rho;

@@ -34,6 +34,14 @@ struct SolverOptions {
   // penalty still at 1e4.
   double nearFeasible = 1e-4;
   double nearFeasiblePenalty = 1e5;
+  // A warm start the Newton steps could not finish (a large edit) restarts its penalty here, not
+  // at initialPenalty: its multipliers are already good, and at 100 the iterate drifted from the
+  // previous motion into other optima (luxo_3d's end pose moved -10 cm: 998 LM iterations to
+  // 34.530 against the cold solve's 32.094; the power-formula jump's moved +10 cm: 9908 to 6222
+  // against 5410.85). At 1e4 both land on the cold optimum, in 299 and 300 iterations, and the
+  // edits of the jump, hurdle and heavy lamp by -10 to +20 cm take 120-1140 LM iterations instead
+  // of 300-3005 (docs/STATUS.md, session 19).
+  double warmRestartPenalty = 1e4;
   double maxSeconds = 300;       // wall-clock budget of the whole solve, Newton polish included
   int threads = 1;               // Ceres evaluation threads
   bool warmStart = false;        // keep the problem's current multipliers and penalty
