@@ -30,7 +30,7 @@ std::vector<double> intervalTimes(const Transcription& tr, const std::string& ch
                                   bool stance = false) {
   std::vector<double> times = {a, b};
   for (const Sample& s : tr.samplesIn(a, b, &character))
-    if (std::abs(s.time - a) > 1e-9 && std::abs(s.time - b) > 1e-9 && (stance || !s.stance))
+    if (std::abs(s.time - a) > kTimeTolerance && std::abs(s.time - b) > kTimeTolerance && (stance || !s.stance))
       times.push_back(s.time);
   std::sort(times.begin(), times.end());
   return times;
@@ -143,7 +143,7 @@ int SpacetimeProblem::hermiteInterval(int c, const DofGroup& g, double t, Side s
                    0, static_cast<int>(br.size()) - 2);
   // At an interior breakpoint, take the interval on the side that has t's contacts. (An impact
   // repeats its breakpoint; upper_bound already lands after the repeat, on the contact side.)
-  else if (side == Side::Contacts && k > 0 && std::abs(t - br[k]) < 1e-9 &&
+  else if (side == Side::Contacts && k > 0 && std::abs(t - br[k]) < kTimeTolerance &&
       activeContacts(c, 0.5 * (br[k - 1] + br[k])) == activeContacts(c, t) &&
       activeContacts(c, 0.5 * (br[k] + br[k + 1])) != activeContacts(c, t))
     --k;
@@ -284,7 +284,7 @@ void SpacetimeProblem::setQuadratureScale(InputMap& in, const TimeRef& r, double
 
 int ContactVariables::sampleIndex(double t) const {
   for (size_t i = 0; i < times.size(); ++i)
-    if (std::abs(times[i] - t) < 1e-9) return static_cast<int>(i);
+    if (std::abs(times[i] - t) < kTimeTolerance) return static_cast<int>(i);
   return -1;
 }
 
