@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <tuple>
 
 #include "dynamics/algorithms.h"
 #include "dynamics/contact_points.h"
@@ -118,11 +119,13 @@ ImpactCheck checkImpact(const SpacetimeProblem& problem, int j) {
   return ic;
 }
 
+// The side of its instant a sample is read on (Sample::after: the flight's).
+Side sideOf(const Sample& s) { return s.after ? Side::After : Side::Contacts; }
+
 }  // namespace
 
 double sampleUnactuatedResidual(const SpacetimeProblem& problem, int c, const Sample& s) {
-  const Side side = s.after ? Side::After : Side::Contacts;
-  return unactuatedResidual(problem, c, s.time, groundForcesAt(problem, c, s.time, side), side);
+  return unactuatedResidual(problem, c, s.time, groundForcesAt(problem, c, s.time, sideOf(s)), sideOf(s));
 }
 
 ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, const std::atomic<bool>* cancel) {
@@ -133,12 +136,12 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, c
   const Transcription& tr = problem.transcription();
   const std::vector<double> dense = tr.denseGrid(denseFactor);
   r.minNormalForce = problem.contacts().empty() ? 0 : 1e300;
-  // Ground forces (an NNLS each) by character and time, solved once: the residual checks and
-  // the contact checks below read the same instants.
-  std::map<std::pair<int, double>, GroundForces> groundCache;
-  auto groundAt = [&](int c, double t) -> const GroundForces& {
-    auto [it, fresh] = groundCache.try_emplace({c, t});
-    if (fresh) it->second = groundForcesAt(problem, c, t);
+  // Ground forces (an NNLS each) by character, time and side, solved once: the residual checks
+  // and the contact checks below read the same instants.
+  std::map<std::tuple<int, double, Side>, GroundForces> groundCache;
+  auto groundAt = [&](int c, double t, Side side = Side::Contacts) -> const GroundForces& {
+    auto [it, fresh] = groundCache.try_emplace({c, t, side});
+    if (fresh) it->second = groundForcesAt(problem, c, t, side);
     return it->second;
   };
   for (size_t c = 0; c < problem.characters().size(); ++c) {
@@ -147,8 +150,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, c
       if (problem.physicsAt(ci, s))
         r.maxUnactuatedResidualSamples =
             std::max(r.maxUnactuatedResidualSamples,
-                     s.after ? sampleUnactuatedResidual(problem, ci, s)
-                             : unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time)));
+                     unactuatedResidual(problem, ci, s.time, groundAt(ci, s.time, sideOf(s)), sideOf(s)));
     // The dense grid, ten times finer again over the grid step on each side of every contact's
     // start and end, where the root's acceleration and the ground force jump. Before the flight
     // was collocated from its first instant (Sample::after), luxo_jump's residual was 0 at the
