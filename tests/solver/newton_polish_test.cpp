@@ -133,6 +133,26 @@ TEST(NewtonPolish, LuxoJumpReachesTheAugmentedLagrangiansOptimumSooner) {
   for (const ValidityCheck& c : validityChecklist(v)) EXPECT_TRUE(c.pass) << c.name << ": " << c.value;
 }
 
+// A shipped scene solved cold with 2 threads (the options are the scene's), the state warm edits
+// start from.
+struct Solved {
+  Scene scene;
+  SolverOptions options;
+  std::unique_ptr<SpacetimeProblem> problem;
+};
+Solved solvedShipped(const std::string& name) {
+  Solved s{testing::shippedScene(name), {}, nullptr};
+  s.options = solverOptionsFor(s.scene.solver);
+  s.options.threads = 2;
+  std::string error;
+  s.problem = SpacetimeProblem::build(s.scene, &error);
+  EXPECT_TRUE(s.problem) << error;
+  if (s.problem) {
+    EXPECT_TRUE(solveSpacetime(*s.problem, s.options).converged);
+  }
+  return s;
+}
+
 // `original` with its end pose's base_x moved by `move`, solved warm from `before` (its solution
 // and multipliers) and cold; the warm problem is kept for further checks.
 struct WarmAndCold {
@@ -166,16 +186,12 @@ WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimePro
 // augmented Lagrangian restarts its penalty (844 LM iterations with the old one, 240 restarted).
 // Either way the result is the optimum a cold solve finds.
 TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheColdOptimum) {
-  const Scene original = testing::shippedScene("luxo_jump.json");
-  std::string error;
-  auto before = SpacetimeProblem::build(original, &error);
-  ASSERT_TRUE(before) << error;
-  SolverOptions options = solverOptionsFor(original.solver);
-  options.threads = 2;
-  ASSERT_TRUE(solveSpacetime(*before, options).converged);
+  const Solved before = solvedShipped("luxo_jump.json");
+  ASSERT_TRUE(before.problem);
+  const SolverOptions& options = before.options;
   for (const double move : {0.02, 0.10}) {
     SCOPED_TRACE(move);
-    const WarmAndCold r = resolveWithTheEndPoseMoved(original, *before, move, options);
+    const WarmAndCold r = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options);
     ASSERT_TRUE(r.warm);
     const SolverSummary &w = r.w, &c = r.c;
     ASSERT_TRUE(w.converged && c.converged) << w.reason << " / " << c.reason;
@@ -194,14 +210,9 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheColdOptimum) {
 // from the previous motion into another optimum (34.530 against 32.094, 998 iterations); at
 // SolverOptions::warmRestartPenalty it lands on the cold solve's.
 TEST(NewtonPolish, LargeEditOfTheThreeDLampLandsOnTheColdOptimum) {
-  const Scene original = testing::shippedScene("luxo_3d.json");
-  std::string error;
-  auto before = SpacetimeProblem::build(original, &error);
-  ASSERT_TRUE(before) << error;
-  SolverOptions options = solverOptionsFor(original.solver);
-  options.threads = 2;
-  ASSERT_TRUE(solveSpacetime(*before, options).converged);
-  const WarmAndCold r = resolveWithTheEndPoseMoved(original, *before, -0.10, options);
+  const Solved before = solvedShipped("luxo_3d.json");
+  ASSERT_TRUE(before.problem);
+  const WarmAndCold r = resolveWithTheEndPoseMoved(before.scene, *before.problem, -0.10, before.options);
   const SolverSummary &w = r.w, &c = r.c;
   ASSERT_TRUE(w.converged && c.converged) << w.reason << " / " << c.reason;
   EXPECT_GT(w.iterations, 0);  // the Newton steps alone did not finish it
