@@ -11,6 +11,19 @@ namespace spacetime::ui {
 namespace {
 // Undo keeps whole scenes: compare them by their canonical text.
 bool sameScene(const Scene& a, const Scene& b) { return sceneToJson(a) == sceneToJson(b); }
+
+// The motion a scene file stored with it, if it still fits the scene's problem; null if not.
+std::shared_ptr<const SolvedMotion> restoredMotion(const Scene& scene, const StoredSolution& stored) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  if (!problem || !problem->restore({stored.variables, stored.multipliers, stored.rho})) return nullptr;
+  auto m = sampleMotion(*problem);
+  m->solved = true;
+  m->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));
+  m->converged = stored.converged;
+  m->reason = "loaded with the scene";
+  return m;
+}
 }  // namespace
 
 Document::Document(QObject* parent) : QObject(parent) {
@@ -39,22 +52,9 @@ void Document::applyScene(const Scene& scene) {
 void Document::reset(const Scene& scene, const QString& filePath) {
   undo_.clear();
   scene_ = scene;
-  std::optional<StoredSolution> stored = std::move(scene_.solution);
   scene_.solution.reset();
   rebuildModels();
-  motion_.reset();
-  if (stored) {
-    std::string error;
-    if (auto problem = SpacetimeProblem::build(scene_, &error);
-        problem && problem->restore({stored->variables, stored->multipliers, stored->rho})) {
-      auto m = sampleMotion(*problem);
-      m->solved = true;
-      m->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));
-      m->converged = stored->converged;
-      m->reason = "loaded with the scene";
-      motion_ = m;
-    }
-  }
+  motion_ = scene.solution ? restoredMotion(scene_, *scene.solution) : nullptr;
   path_ = filePath;
   time_ = scene_.startTime;
   selCharacter_ = scene_.characters.empty() ? -1 : 0;
