@@ -18,6 +18,8 @@
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
+#include <QChartView>
+#include <QValueAxis>
 #include <cmath>
 
 #include "core/scene_io.h"
@@ -375,6 +377,84 @@ class EditorTest : public QObject {
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(300000));
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
+  }
+
+  // The graphs plot what the physics says they must: in flight the plotted centre of mass falls
+  // at g (its second difference on the 120 Hz frames), a body's plotted velocity is the
+  // derivative of its plotted position, the plotted ground forces change the centre of mass's
+  // momentum as Newton says, and the physics residual stays within the validity report's 1 % of
+  // weight. The value axis is labelled at round numbers.
+  void graphsPlotTheSolvedLampsPhysics() {
+    QCOMPARE(niceTickInterval(28.6), 5.0);
+    QCOMPARE(niceTickInterval(1.0), 0.2);
+    QVERIFY(std::abs(niceTickInterval(0.013) - 0.002) < 1e-15);
+    QCOMPARE(niceTickInterval(0.0), 1.0);
+    MainWindow w;
+    QVERIFY(openLuxo(w));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(300000));
+    QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
+    const Document& doc = *w.document();
+    auto series = [&](const char* key) {
+      PlotSeries s;
+      QString error;
+      if (!computeSeries(doc, key, &s, &error)) qWarning("%s: %s", key, qPrintable(error));
+      return s;
+    };
+    const PlotSeries com = series("com/0/y");
+    QVERIFY(com.times.size() > 100);
+    const double h = com.times[1] - com.times[0];
+    int flightFrames = 0;
+    for (size_t f = 1; f + 1 < com.times.size(); ++f) {
+      if (com.times[f] < 0.45 || com.times[f] > 0.75) continue;  // the flight is 0.4-0.8 s
+      const double accel = (com.values[f + 1] - 2 * com.values[f] + com.values[f - 1]) / (h * h);
+      QVERIFY2(std::abs(accel + 9.81) < 0.05, qPrintable(QString("com accel %1 at %2 s").arg(accel).arg(com.times[f])));
+      ++flightFrames;
+    }
+    QVERIFY(flightFrames > 30);
+    // The touch-down at 0.8 s is an impact: the velocity jumps there, so the difference across
+    // it is no derivative. Elsewhere the central difference's truncation error at 120 Hz is up
+    // to 1.4 % of the peak velocity (in the push-off).
+    const PlotSeries pos = series("pos/0/head/x"), vel = series("vel/0/head/x");
+    double worst = 0, peak = 0;
+    for (size_t f = 1; f + 1 < pos.times.size(); ++f) {
+      if (std::abs(pos.times[f] - 0.8) <= h) continue;
+      worst = std::max(worst, std::abs((pos.values[f + 1] - pos.values[f - 1]) / (2 * h) - vel.values[f]));
+      peak = std::max(peak, std::abs(vel.values[f]));
+    }
+    qInfo("velocity vs derivative of position: %g of peak %g", worst, peak);
+    QVERIFY2(worst < 0.03 * peak, qPrintable(QString("velocity vs derivative of position: %1 of peak %2").arg(worst).arg(peak)));
+    // Newton's second law for the whole lamp on the ground, in impulse form: over each stance the
+    // plotted ground force less the weight, integrated, is the change of the plotted centre of
+    // mass's momentum. (A second difference of the 120 Hz frames is too coarse for the push-off,
+    // 0.1 × weight off at 0.3 s, and so is a first difference in its last 50 ms, 1.2 %.)
+    const double mass = doc.models()[0].totalMass(), weight = mass * 9.81;
+    const PlotSeries takeoff = series("force/takeoff/y"), landing = series("force/landing/y");
+    QCOMPARE(takeoff.values.size(), com.values.size());
+    QCOMPARE(landing.values.size(), com.values.size());
+    auto frameAt = [&](double t) { return static_cast<size_t>(std::lround((t - com.times[0]) / h)); };
+    auto comVelocity = [&](size_t f) { return (com.values[f + 1] - com.values[f - 1]) / (2 * h); };
+    for (const auto& [a, b] : {std::pair{0.05, 0.3}, std::pair{0.85, 1.15}}) {
+      const size_t fa = frameAt(a), fb = frameAt(b);
+      double impulse = 0;
+      for (size_t f = fa; f < fb; ++f)
+        impulse += 0.5 * h * (takeoff.values[f] + landing.values[f] + takeoff.values[f + 1] + landing.values[f + 1] - 2 * weight);
+      const double momentum = mass * (comVelocity(fb) - comVelocity(fa));
+      qInfo("stance %g-%g s: impulse %g N s, momentum change %g N s", a, b, impulse, momentum);
+      QVERIFY(std::abs(impulse - momentum) < 0.002 * weight * (b - a));
+    }
+    const PlotSeries residual = series("residual/0");
+    QVERIFY(!residual.values.empty());
+    QVERIFY(*std::max_element(residual.values.begin(), residual.values.end()) < 0.01);
+    // Plotted in the panel: the value axis steps by 1, 2 or 5 times a power of ten.
+    w.graphs()->setChecked("com/0/y", true);
+    auto* chart = w.graphs()->findChild<QChartView*>()->chart();
+    auto* axis = qobject_cast<QValueAxis*>(chart->axes(Qt::Vertical).value(0));
+    QVERIFY(axis);
+    QCOMPARE(axis->tickType(), QValueAxis::TicksDynamic);
+    const double step = axis->tickInterval(), mantissa = step / std::pow(10.0, std::floor(std::log10(step)));
+    QVERIFY2(std::abs(mantissa - 1) < 1e-9 || std::abs(mantissa - 2) < 1e-9 || std::abs(mantissa - 5) < 1e-9,
+             qPrintable(QString("tick interval %1").arg(step)));
   }
 
   // The validity panel shows the engine's checklist for the solved motion: before a solve it

@@ -35,6 +35,14 @@ double valueAt(const PlotSeries& s, double t) {
 
 }  // namespace
 
+double niceTickInterval(double span, int ticks) {
+  if (!(span > 0) || !std::isfinite(span)) return 1;
+  const double raw = span / std::max(1, ticks);
+  const double decade = std::pow(10.0, std::floor(std::log10(raw)));
+  const double f = raw / decade;
+  return (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * decade;
+}
+
 bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QString* error) {
   const std::shared_ptr<const SolvedMotion> motion = doc.motion();
   if (!motion) {
@@ -341,6 +349,9 @@ void GraphPanel::replot() {
   if (lo > hi) { lo = -1; hi = 1; }
   const double pad = std::max(1e-9, 0.05 * (hi - lo));
   y->setRange(lo - pad, hi + pad);
+  y->setTickType(QValueAxis::TicksDynamic);
+  y->setTickAnchor(0);
+  y->setTickInterval(niceTickInterval(hi - lo + 2 * pad));
   view_->cursorTime = doc_->currentTime();
   view_->viewport()->update();
 }

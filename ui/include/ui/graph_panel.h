@@ -25,6 +25,10 @@ struct PlotSeries {
 // "residual/<c>", "formula/<c>/<text>". False with a reason if the key does not apply.
 bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QString* error);
 
+// The spacing of an axis's ticks over a span: 1, 2 or 5 times a power of ten, giving about
+// `ticks` ticks, so that the labels read 0, 5, 10 and not 5.59, 12.8, 19.9.
+double niceTickInterval(double span, int ticks = 5);
+
 class GraphView : public QChartView {
   Q_OBJECT
  public:
