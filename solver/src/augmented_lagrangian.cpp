@@ -3,6 +3,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -103,6 +104,7 @@ std::string SolverOptions::validate() const {
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
   if (!(polishBelow > 0)) return "polishBelow must be > 0";
   if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
+  if (stallUpdates < 1) return "stallUpdates must be at least 1";
   return "";
 }
 
@@ -110,6 +112,7 @@ std::string toString(SolveStatus s) {
   switch (s) {
     case SolveStatus::Converged: return "converged";
     case SolveStatus::IterationLimit: return "iteration limit";
+    case SolveStatus::Stalled: return "stalled";
     case SolveStatus::TimeLimit: return "time limit";
     case SolveStatus::Cancelled: return "cancelled";
     case SolveStatus::NumericalFailure: return "numerical failure";
@@ -153,6 +156,23 @@ ProblemMeasures measure(const SpacetimeProblem& problem, const std::vector<std::
 }  // namespace
 
 ProblemMeasures measure(const SpacetimeProblem& problem) { return measure(problem, rawRows(problem)); }
+
+std::vector<ViolatedConstraint> mostViolated(const SpacetimeProblem& problem, double floor, int limit) {
+  std::vector<ViolatedConstraint> out;
+  for (const TermResidual* r : problem.residuals()) {
+    const std::vector<double> rows = r->rawRowsNow();
+    const auto& kinds = r->kernel().rowKinds();
+    double worst = 0;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      if (kinds[i] == RowKind::Equality) worst = std::max(worst, std::abs(rows[i]));
+      else if (kinds[i] == RowKind::Inequality) worst = std::max(worst, rows[i]);
+    }
+    if (worst > floor) out.push_back({r->kernel().label(), worst});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.violation > b.violation; });
+  if (static_cast<int>(out.size()) > limit) out.resize(static_cast<size_t>(limit));
+  return out;
+}
 
 SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
                              const ProgressCallback& callback, const std::atomic<bool>* cancel) {
@@ -198,6 +218,8 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   SolutionState lastGood = problem.state();
   ProblemMeasures m = measure(problem);
   double previousViolation = m.maxViolation;
+  double stallReference = m.maxViolation;  // the violation when the current stall began
+  int stalledUpdates = 0;
   // The Newton polish (newton_polish.h); true if it reached a KKT point, which ends the solve.
   // It stops at the solve's own time limit.
   int polishAttempts = 0;
@@ -311,10 +333,24 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
                                                               : options.maxPenalty;
     if (m.maxViolation > 0.25 * previousViolation && al.rho < cap) al.rho = std::min(al.rho * options.penaltyGrowth, cap);
     previousViolation = m.maxViolation;
+    // A stall: the penalty at its cap and the violation no longer falling. Below nearFeasible the
+    // multiplier updates are closing a small gap, slowly, and are left to it.
+    if (al.rho < cap || m.maxViolation <= options.nearFeasible || m.maxViolation < 0.99 * stallReference) {
+      stallReference = m.maxViolation;
+      stalledUpdates = 0;
+    } else if (++stalledUpdates >= options.stallUpdates) {
+      std::ostringstream why;
+      why << "the constraints stopped improving at a violation of " << m.maxViolation << " over the last "
+          << stalledUpdates << " multiplier updates at the largest penalty: some of them may conflict";
+      summary.status = SolveStatus::Stalled;
+      summary.reason = why.str();
+      break;
+    }
   }
   // Constraint projection: land exactly on the constraints from the AL's near-optimal point.
   // m is current here: the loop measured after the last inner solve and nothing moved since.
-  if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Converged) {
+  if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Stalled ||
+      summary.status == SolveStatus::Converged) {
     if (m.maxViolation > options.tolerance) {
       ceres::Solver::Options po = co;
       po.max_num_iterations = options.maxProjectionIterations;
@@ -350,6 +386,15 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     summary.reason = "constraints within tolerance, but the augmented Lagrangian was not yet "
                      "stationary after " + std::to_string(options.maxOuterIterations) +
                      " multiplier updates (the objective may still improve)";
+  if (!summary.converged && m.maxViolation > options.tolerance) {
+    summary.violated = mostViolated(problem, std::max(options.tolerance, 0.1 * m.maxViolation), 5);
+    if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Stalled) {
+      std::ostringstream most;
+      for (size_t i = 0; i < summary.violated.size(); ++i)
+        most << (i ? ", " : "; most violated: ") << summary.violated[i].label << " (" << summary.violated[i].violation << ")";
+      summary.reason += most.str();
+    }
+  }
   summary.objective = m.objective;
   summary.maxViolation = m.maxViolation;
   summary.worstConstraint = m.worstConstraint;

@@ -45,6 +45,10 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["linear_solver_seconds"] = s.linearSolverSeconds;
   j["max_violation"] = s.maxViolation;
   j["worst_constraint"] = s.worstConstraint;
+  // Unmet constraints of a solve that stopped short, largest first (empty when converged).
+  json violated = json::array();
+  for (const ViolatedConstraint& v : s.violated) violated.push_back({{"constraint", v.label}, {"violation", v.violation}});
+  j["violated_constraints"] = violated;
   j["variables"] = problem.variables().size();
   j["residual_blocks"] = problem.residuals().size();
   // Each contact's interval as solved: a free end (freeEnd) is where the solver let go.

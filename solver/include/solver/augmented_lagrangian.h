@@ -12,6 +12,7 @@
 #include <atomic>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "solver/spacetime_problem.h"
 
@@ -58,6 +59,11 @@ struct SolverOptions {
   double polishBelow = 1e-4;
   int maxPolishIterations = 15;
   int maxPolishAttempts = 2;  // the second after the violation dropped tenfold
+  // Constraints that cannot all hold (two pins at one instant in two places, a contact held over
+  // the whole clip under a jump's end pose) stall the violation while the penalty sits at its
+  // cap. The solve stops as Stalled after stallUpdates such multiplier updates in which the
+  // violation fell by less than 1 % in all, instead of spending the rest of maxOuterIterations.
+  int stallUpdates = 10;
 
   std::string validate() const;  // empty if valid, else what is wrong
 };
@@ -73,7 +79,13 @@ struct IterationReport {
   double rho = 0;
 };
 
-enum class SolveStatus { Converged, IterationLimit, TimeLimit, Cancelled, NumericalFailure, InvalidOptions };
+enum class SolveStatus { Converged, IterationLimit, Stalled, TimeLimit, Cancelled, NumericalFailure, InvalidOptions };
+
+// A constraint (one term's rows at one instant) and its largest row violation.
+struct ViolatedConstraint {
+  std::string label;
+  double violation = 0;
+};
 
 struct SolverSummary {
   SolveStatus status = SolveStatus::InvalidOptions;
@@ -82,6 +94,11 @@ struct SolverSummary {
   double objective = 0;
   double maxViolation = 0;
   std::string worstConstraint;  // label of the most violated row
+  // When the solve stops with the constraints unmet: the most violated constraints, largest
+  // first (those above a tenth of the largest, at most five). At a stall they are the ones that
+  // conflict: the final projection minimises the violations' squares, and at its minimum the
+  // unmet rows' gradients cancel.
+  std::vector<ViolatedConstraint> violated;
   int outerIterations = 0;
   int iterations = 0;           // total Levenberg-Marquardt iterations
   int newtonSteps = 0;          // of the Newton polish, whether it succeeded or not
@@ -106,6 +123,10 @@ struct ProblemMeasures {
   std::string worstConstraint;
 };
 ProblemMeasures measure(const SpacetimeProblem& problem);
+
+// The constraints violated by more than `floor` at the problem's current variables, largest
+// first, at most `limit`.
+std::vector<ViolatedConstraint> mostViolated(const SpacetimeProblem& problem, double floor, int limit);
 
 std::string toString(SolveStatus s);
 
