@@ -476,6 +476,33 @@ class EditorTest : public QObject {
     QVERIFY2(w.validity()->verdict().contains("scene changed"), qPrintable(w.validity()->verdict()));
   }
 
+  // Two pins at one instant in two places: the solve stops at the stall, and the validity panel
+  // names the two pins on top, as what to change.
+  void conflictingPinsAreNamedInTheValidityPanel() {
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/particle.json"));
+    w.document()->edit("Add a clashing pin", [](Scene& s) {
+      TermSpec clash = s.terms[1];
+      clash.id = "clash";
+      clash.position = Eigen::Vector3d(5, 5, 5);
+      s.terms.push_back(clash);
+    });
+    const std::string pinned = w.document()->scene().terms[1].id;
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
+    QVERIFY(!w.document()->motion()->converged);
+    QVERIFY2(w.validity()->verdict().contains("unmet"), qPrintable(w.validity()->verdict()));
+    QTreeWidget* rows = w.validity()->list();
+    QVERIFY(rows->topLevelItemCount() > 2);
+    QStringList top{rows->topLevelItem(0)->text(0), rows->topLevelItem(1)->text(0)};
+    top.sort();
+    QVERIFY2(top[0].startsWith("unmet: pin 'clash'"), qPrintable(top.join(" | ")));
+    QVERIFY2(top[1].startsWith(QString("unmet: pin '%1'").arg(QString::fromStdString(pinned))), qPrintable(top.join(" | ")));
+    QVERIFY(!rows->topLevelItem(2)->text(0).startsWith("unmet"));
+    QVERIFY2(w.statusText().contains("conflict"), qPrintable(w.statusText()));
+  }
+
   void viewportDrawsTheLampInItsColours() {
     MainWindow w;
     QVERIFY(openLuxo(w, QSize(1200, 800)));

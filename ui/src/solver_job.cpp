@@ -141,6 +141,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->solved = true;
       final->converged = summary.converged;
       final->reason = summary.reason;
+      final->violated = summary.violated;
       const int gen = run->generation;
       result = final;
       {

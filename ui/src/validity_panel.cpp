@@ -73,6 +73,19 @@ void ValidityPanel::rebuild() {
     if (a.pass != b.pass) return !a.pass;
     return !a.pass && excess(a) > excess(b);
   });
+  // A solve that stopped short lists its unmet constraints on top: they say what to change.
+  const QBrush red(QColor(200, 40, 30));
+  for (const ViolatedConstraint& v : motion->violated) {
+    auto* item = new QTreeWidgetItem(list_);
+    item->setText(0, tr("unmet: %1").arg(QString::fromStdString(v.label)));
+    item->setText(1, QString::number(v.violation, 'g', 3));
+    item->setText(2, tr("= 0"));
+    item->setIcon(0, style()->standardIcon(QStyle::SP_MessageBoxCritical));
+    item->setForeground(1, red);
+    const QString tip = tr("%1 is off by %2 (metres, radians or a fraction of the weight) where the solve stopped")
+                            .arg(QString::fromStdString(v.label)).arg(v.violation, 0, 'g', 3);
+    for (int column = 0; column < 3; ++column) item->setToolTip(column, tip);
+  }
   int failing = 0;
   for (const ValidityCheck& c : checks) {
     const bool yesNo = c.yesNo;
@@ -82,7 +95,7 @@ void ValidityPanel::rebuild() {
                            : QString("%1 %2").arg(c.value, 0, 'g', 3).arg(QString::fromStdString(c.unit)));
     item->setText(2, yesNo ? QString() : QString("≤ %1").arg(c.limit, 0, 'g', 3));
     item->setIcon(0, style()->standardIcon(c.pass ? QStyle::SP_DialogApplyButton : QStyle::SP_MessageBoxWarning));
-    item->setForeground(1, c.pass ? palette().text() : QBrush(QColor(200, 40, 30)));
+    item->setForeground(1, c.pass ? palette().text() : red);
     QString tip = QString("%1: %2 %3").arg(item->text(0), item->text(1), item->text(2));
     if (c.time) {
       item->setData(0, Qt::UserRole, *c.time);
@@ -94,6 +107,9 @@ void ValidityPanel::rebuild() {
   QString verdict = failing == 0 ? tr("Physically valid: all %1 checks pass.").arg(checks.size())
                                  : tr("%1 of %2 checks fail: the motion is not physical between the samples "
                                       "or does not meet its terms.").arg(failing).arg(checks.size());
+  if (!motion->violated.empty())
+    verdict = tr("The solve stopped with constraints unmet (listed first; when the violation stalled, they "
+                 "conflict with each other). ") + verdict;
   // After an edit the motion on screen is still the last solve's, checked against its own scene.
   if (motion->scene && sceneToJson(*motion->scene) != sceneToJson(doc_->scene()))
     verdict = tr("The scene changed since this solve; these checks are of the solved scene. ") + verdict;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "solver/animation.h"
+#include "solver/augmented_lagrangian.h"
 #include "solver/spacetime_problem.h"
 #include "solver/validity.h"
 
@@ -26,6 +27,9 @@ struct SolvedMotion {
   bool solved = false;     // false: the initial guess, or an iterate still being refined
   bool converged = false;  // the final solve met its tolerance
   std::string reason;      // why the solve stopped (final motions)
+  // The constraints a final solve left unmet, largest first (empty when it converged): when the
+  // violation stalls, the ones in conflict.
+  std::vector<ViolatedConstraint> violated;
   // The validity report of a final or loaded solution (null for iterates and guesses): is the
   // motion physical between the samples too?
   std::shared_ptr<const ValidityReport> validity;
