@@ -131,6 +131,16 @@ std::vector<std::vector<double>> rawRows(const SpacetimeProblem& problem) {
   return rows;
 }
 
+// How far a constraint row is from holding (0 for objective rows).
+double rowViolation(RowKind kind, double row) {
+  switch (kind) {
+    case RowKind::Objective: return 0;
+    case RowKind::Equality: return std::abs(row);
+    case RowKind::Inequality: return std::max(0.0, row);
+  }
+  return 0;
+}
+
 ProblemMeasures measure(const SpacetimeProblem& problem, const std::vector<std::vector<double>>& rows) {
   ProblemMeasures m;
   for (size_t k = 0; k < rows.size(); ++k) {
@@ -138,12 +148,11 @@ ProblemMeasures measure(const SpacetimeProblem& problem, const std::vector<std::
     const auto& kinds = r->kernel().rowKinds();
     for (size_t i = 0; i < rows[k].size(); ++i) {
       const double row = rows[k][i];
-      double v = 0;
-      switch (kinds[i]) {
-        case RowKind::Objective: m.objective += row * row; continue;
-        case RowKind::Equality: v = std::abs(row); break;
-        case RowKind::Inequality: v = std::max(0.0, row); break;
+      if (kinds[i] == RowKind::Objective) {
+        m.objective += row * row;
+        continue;
       }
+      const double v = rowViolation(kinds[i], row);
       if (!(v <= m.maxViolation)) {  // also catches NaN
         m.maxViolation = v;
         m.worstConstraint = r->kernel().label();
@@ -163,10 +172,7 @@ std::vector<ViolatedConstraint> mostViolated(const SpacetimeProblem& problem, do
     const std::vector<double> rows = r->rawRowsNow();
     const auto& kinds = r->kernel().rowKinds();
     double worst = 0;
-    for (size_t i = 0; i < rows.size(); ++i) {
-      if (kinds[i] == RowKind::Equality) worst = std::max(worst, std::abs(rows[i]));
-      else if (kinds[i] == RowKind::Inequality) worst = std::max(worst, rows[i]);
-    }
+    for (size_t i = 0; i < rows.size(); ++i) worst = std::max(worst, rowViolation(kinds[i], rows[i]));
     if (worst > floor) out.push_back({r->kernel().label(), worst});
   }
   std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.violation > b.violation; });
