@@ -6,9 +6,9 @@
 // that cannot fix the root (one point, a body other than the root) leave it free.
 #include <gtest/gtest.h>
 
-#include <random>
 
 #include "../shipped_scene.h"
+#include "perturbed.h"
 #include "split_landing.h"
 #include "solver/spacetime_problem.h"
 
@@ -20,9 +20,7 @@ std::unique_ptr<SpacetimeProblem> randomised(const Scene& scene) {
   auto problem = SpacetimeProblem::build(scene, &error);
   EXPECT_TRUE(problem) << error;
   if (!problem) return problem;
-  std::mt19937 rng(11);
-  std::normal_distribution<double> noise(0.0, 0.3);
-  for (double& x : problem->variables()) x += noise(rng);
+  testing::perturb(*problem, 11, 0.3);
   return problem;
 }
 

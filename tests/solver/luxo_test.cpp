@@ -4,11 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <random>
 #include <sstream>
 #include <tuple>
 
 #include "../shipped_scene.h"
+#include "perturbed.h"
 #include "split_landing.h"
 #include "staggered_lamps.h"
 #include "core/scene_io.h"
@@ -83,9 +83,7 @@ TEST(LuxoValidity, FlagsADivergingForwardSimulation) {
   std::string error;
   auto problem = SpacetimeProblem::build(luxoScene(), &error);
   ASSERT_TRUE(problem) << error;
-  std::mt19937 rng(3);
-  std::normal_distribution<double> noise(0.0, 50.0);
-  for (double& x : problem->variables()) x += noise(rng);
+  testing::perturb(*problem, 3, 50.0);
   const ValidityReport v = checkValidity(*problem);
   ASSERT_FALSE(v.flights.empty());
   EXPECT_TRUE(v.forwardSimulationDiverged);
@@ -126,9 +124,7 @@ TEST(LuxoValidity, ReadsAFlightsFirstInstantOnTheFlightSide) {
   std::string error;
   auto problem = SpacetimeProblem::build(luxoScene(), &error);
   ASSERT_TRUE(problem) << error;
-  std::mt19937 rng(11);
-  std::normal_distribution<double> noise(0.0, 0.05);
-  for (double& x : problem->variables()) x += noise(rng);
+  testing::perturb(*problem, 11, 0.05);
   const Sample* first = nullptr;
   for (const Sample& s : problem->transcription().samples)
     if (s.after && problem->physicsAt(0, s)) first = &s;
@@ -225,9 +221,7 @@ TEST_P(LuxoSamples, RootCurvesAreConsistentAndC1) {
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
   ASSERT_TRUE(problem) << error;
-  std::mt19937 rng(5);
-  std::normal_distribution<double> noise(0.0, 0.3);
-  for (double& x : problem->variables()) x += noise(rng);
+  testing::perturb(*problem, 5, 0.3);
   const std::vector<double>& breaks = problem->characters()[0].groups[1].breaks;
   for (size_t k = 0; k + 1 < breaks.size(); ++k) {
     const double a = breaks[k], b = breaks[k + 1], h = 1e-6;

@@ -11,10 +11,10 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <random>
 #include <stdexcept>
 
 #include "../shipped_scene.h"
+#include "perturbed.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 #include "dynamics/algorithms.h"
@@ -93,9 +93,7 @@ TEST_P(Particle, FormulaTermsReachTheSameOptimum) {
   ValidityReport v = checkValidity(*problem);
   ASSERT_EQ(v.formulas.size(), formulas.size());
   EXPECT_LT(v.maxFormulaViolation, 1e-6);
-  std::mt19937 rng(2);
-  std::normal_distribution<double> noise(0.0, 0.2);
-  for (double& x : problem->variables()) x += noise(rng);
+  testing::perturb(*problem, 2, 0.2);
   v = checkValidity(*problem);
   for (size_t k = 0; k < formulas.size(); ++k) {
     const TermSpec& f = formulas[k];
