@@ -17,6 +17,7 @@
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/outputs.h"
+#include "solver/refinement.h"
 #include "solver/validity.h"
 
 using namespace spacetime;
@@ -24,7 +25,8 @@ using namespace spacetime;
 namespace {
 
 #define SPACETIME_CLI_USAGE \
-  "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet] [--no-polish]\n"
+  "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet]\n" \
+  "                          [--no-polish] [--max-refinements N]\n"
 
 constexpr const char* kHelp =
     SPACETIME_CLI_USAGE
@@ -36,6 +38,8 @@ constexpr const char* kHelp =
     "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
     "  --quiet            no progress on stderr\n"
     "  --no-polish        the augmented Lagrangian without the Newton polish\n"
+    "  --max-refinements N  finer transcriptions tried when the motion fails the validity report\n"
+    "                     or the solve stalls (default 3; 0: only the scene's transcription)\n"
     "Exit status: 0 converged and valid; 1 outputs not written; 2 bad input or options (nothing\n"
     "written); 3 not converged or out of time (outputs written); 4 converged but the validity\n"
     "report fails (outputs written).\n";
@@ -62,6 +66,7 @@ int main(int argc, char** argv) {
   double maxSeconds = SolverOptions{}.maxSeconds;  // the whole solve's wall-clock budget
   bool quiet = false;
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
+  RefinementOptions refinement;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) outDir = argv[++i];
@@ -80,6 +85,12 @@ int main(int argc, char** argv) {
       if (!end || *end || !(maxSeconds > 0) || maxSeconds > 1e7) return usage("--max-seconds must be a number of seconds in (0, 1e7]");
     } else if (a == "--quiet") quiet = true;
     else if (a == "--no-polish") polish = false;
+    else if (a == "--max-refinements" && i + 1 < argc) {
+      char* end = nullptr;
+      const long n = std::strtol(argv[++i], &end, 10);
+      if (!end || *end || n < 0 || n > 10) return usage("--max-refinements must be a whole number in [0, 10]");
+      refinement.maxRefinements = static_cast<int>(n);
+    }
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (scenePath.empty()) scenePath = a;
     else return usage(("unexpected argument " + a).c_str());
@@ -109,10 +120,18 @@ int main(int argc, char** argv) {
                    r.iterations, r.outer, r.objective, r.maxViolation, r.rho);
       return true;
     };
-  const SolverSummary summary = solveSpacetime(*problem, options, progress);
-  const ValidityReport validity = checkValidity(*problem);
+  RefinedSolve solved = solveRefined(std::move(problem), options, refinement, progress);
+  problem = std::move(solved.problem);
+  const SolverSummary& summary = solved.summary;
+  const ValidityReport& validity = solved.validity;
+  for (const TranscriptionAttempt& a : solved.attempts)
+    if (solved.attempts.size() > 1)
+      std::fprintf(stderr, "transcription %g control points/s, s = %d: %s%s, objective %.9g, dense-grid residual %.3g of weight, %.3f s%s\n",
+                   a.controlPointsPerSecond, a.samplesPerSegment, toString(a.status).c_str(),
+                   a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,
+                   a.maxUnactuatedResidualDense, a.seconds, a.kept ? " (kept)" : "");
   std::string warning;
-  if (!writeSolveOutputs(*problem, summary, validity, rate, outDir, &error, &warning)) {
+  if (!writeSolveOutputs(*problem, summary, validity, rate, outDir, &error, &warning, solved.attempts)) {
     std::fprintf(stderr, "spacetime-cli: %s\n", error.c_str());
     return 1;
   }

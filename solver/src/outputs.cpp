@@ -30,7 +30,7 @@ json rows(const Eigen::MatrixXd& m) {
 }  // namespace
 
 std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
-                        const SpacetimeProblem& problem) {
+                        const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts) {
   json j;
   j["converged"] = s.converged;
   j["status"] = toString(s.status);
@@ -64,6 +64,26 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
     contacts.push_back(jc);
   }
   j["contacts"] = contacts;
+  // The transcription of the motion written, and every one the solve tried (refinement.h).
+  const TranscriptionSpec& spec = problem.scene().transcription;
+  j["transcription"] = {{"control_points_per_second", spec.controlPointsPerSecond},
+                        {"samples_per_segment", spec.samplesPerSegment}};
+  json refinement = json::array();
+  for (const TranscriptionAttempt& a : attempts)
+    refinement.push_back({{"control_points_per_second", a.controlPointsPerSecond},
+                          {"samples_per_segment", a.samplesPerSegment},
+                          {"why", a.why},
+                          {"status", toString(a.status)},
+                          {"converged", a.converged},
+                          {"valid", a.valid},
+                          {"objective", a.objective},
+                          {"max_violation", a.maxViolation},
+                          {"max_unactuated_residual_dense", a.maxUnactuatedResidualDense},
+                          {"iterations", a.iterations},
+                          {"newton_steps", a.newtonSteps},
+                          {"seconds", a.seconds},
+                          {"kept", a.kept}});
+  j["refinement"] = refinement;
   json val;
   val["dense_factor"] = v.denseFactor;
   val["max_unactuated_residual_samples"] = v.maxUnactuatedResidualSamples;
@@ -192,7 +212,8 @@ std::string motionJson(const Animation& animation) {
 
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, double rateHz, const std::string& dir,
-                       std::string* error, std::string* warning) {
+                       std::string* error, std::string* warning,
+                       const std::vector<TranscriptionAttempt>& attempts) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
@@ -214,7 +235,7 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
   for (const CharacterVariables& c : problem.characters()) models.push_back(c.model.get());
   files.emplace_back(dir + "/motion.json", motionJson(animation));
   files.emplace_back(dir + "/motion.glb", motionGlb(problem.scene(), models, animation));
-  files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem));
+  files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem, attempts));
   for (const auto& [path, text] : files)
     if (!writeFileAtomically(path, text, error)) return false;
   return true;

@@ -45,14 +45,27 @@ for bad in "--threads 0" "--threads x" "--max-seconds -1"; do
 done
 
 # One collocation sample per segment: the Luxo jump converges at its samples (~0.1 s) but its
-# unactuated residual between them is ~60 x weight. That is not a good motion: exit 4, the
-# outputs written with "valid": false.
+# unactuated residual between them is ~60 x weight. That is not a good motion: with the
+# refinement off, exit 4, the outputs written with "valid": false.
 sed 's/"samplesPerSegment": 6/"samplesPerSegment": 1/' "$scenes/luxo_jump.json" > "$tmp/coarse.json"
 grep -q '"samplesPerSegment": 1' "$tmp/coarse.json" || fail "could not make the coarse scene"
-"$cli" solve "$tmp/coarse.json" --out "$tmp/coarse" --quiet 2>"$tmp/coarse.err"
+"$cli" solve "$tmp/coarse.json" --out "$tmp/coarse" --quiet --max-refinements 0 2>"$tmp/coarse.err"
 status=$?
 [ "$status" -eq 4 ] || fail "a converged but physically invalid motion exited $status, expected 4: $(cat "$tmp/coarse.err")"
 grep -q '"converged": true' "$tmp/coarse/summary.json" || fail "coarse summary lacks converged: true"
 grep -q '"valid": false' "$tmp/coarse/summary.json" || fail "coarse summary lacks valid: false"
 grep -q "unactuated residual on the dense grid" "$tmp/coarse.err" || fail "the failing check is not named: $(cat "$tmp/coarse.err")"
+
+# By default the solve refines the transcription until the motion is valid: exit 0, and the
+# summary says which transcriptions it tried and which one the motion is at.
+"$cli" solve "$tmp/coarse.json" --out "$tmp/refined" --quiet 2>"$tmp/refined.err" ||
+  fail "the refined coarse scene exited $?: $(cat "$tmp/refined.err")"
+python3 - "$tmp/refined/summary.json" <<'PY' || fail "the refined summary is wrong"
+import json, sys
+s = json.load(open(sys.argv[1]))
+r = s["refinement"]
+assert len(r) >= 2 and r[0]["samples_per_segment"] == 1 and not r[0]["valid"], r
+assert r[-1]["valid"] and r[-1]["kept"] and s["validity"]["valid"], r
+assert s["transcription"]["samples_per_segment"] == r[-1]["samples_per_segment"] > 1, s["transcription"]
+PY
 echo "1 passed, 0 failed"

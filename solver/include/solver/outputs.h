@@ -8,12 +8,14 @@
 
 #include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
+#include "solver/refinement.h"
 #include "solver/validity.h"
 
 namespace spacetime {
 
+// `attempts`: the transcriptions the solve ran on (solveRefined), written as `refinement`.
 std::string summaryJson(const SolverSummary& summary, const ValidityReport& validity,
-                        const SpacetimeProblem& problem);
+                        const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts = {});
 std::string motionJson(const Animation& animation);
 // The same motion as one CSV table for spreadsheets: a header row, then one row per frame with
 // the time and, per character and dof, `<character>.<dof>.q`, `.qd`, `.qdd`, `.tau`. Characters
@@ -24,6 +26,7 @@ std::string motionCsv(const Animation& animation);
 // at the same rate) into dir. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, double rateHz, const std::string& dir,
-                       std::string* error, std::string* warning);
+                       std::string* error, std::string* warning,
+                       const std::vector<TranscriptionAttempt>& attempts = {});
 
 }  // namespace spacetime

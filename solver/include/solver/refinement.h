@@ -1,0 +1,76 @@
+// Automatic refinement of the transcription: solve, check validity between the samples, and
+// solve again on a finer transcription where it fails, warm-started from the coarser motion.
+//
+// A collocation transcription imposes physics at its samples only. A motion the samples cannot
+// resolve (a long jump's push-off at the friction cone's edge, a fast swing after lift-off) then
+// converges but leaves the dynamics unexplained between them (the validity report's dense grid),
+// or stalls because no motion of that resolution meets every constraint. The animator should not
+// have to know that the cure is more collocation points: the scene's transcription is where the
+// solve starts, and each refinement multiplies the control points per second by kRateGrowth and
+// raises the samples per segment to at least kMaxRefinedSamples (more Gauss points and
+// per-sample forces per interval: the stance's ground forces and the root's polynomial follow
+// the joints more closely), rebuilds the problem, starts it from the best motion so far
+// (SpacetimeProblem::initializeFrom: joint splines re-fitted, root data and forces resampled)
+// and solves it with fresh multipliers. It stops at the first
+// transcription whose motion converges and passes every validity check, when the refinement
+// budget is spent, or when a solve stops for a reason a finer transcription cannot change
+// (cancelled, out of time, numerical failure, invalid options).
+//
+// The refinement is uniform: every interval gets finer, also where the residual was small.
+// Measured on the jump ladder (tests/scenes/ladder/; docs/STATUS.md, "Automatic refinement").
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "solver/augmented_lagrangian.h"
+#include "solver/validity.h"
+
+namespace spacetime {
+
+struct RefinementOptions {
+  bool enabled = true;
+  int maxRefinements = 3;                  // finer transcriptions tried after the scene's own
+  double maxControlPointsPerSecond = 80;   // no refinement beyond this rate
+  static constexpr int kMaxRefinedSamples = 8;
+  static constexpr double kRateGrowth = 1.5;
+};
+
+// One transcription the solve ran on, and how that solve ended.
+struct TranscriptionAttempt {
+  double controlPointsPerSecond = 0;
+  int samplesPerSegment = 0;
+  std::string why;               // why this transcription was tried ("the scene's", or the failure)
+  SolveStatus status = SolveStatus::InvalidOptions;
+  bool converged = false;
+  bool valid = false;            // every validity check passes
+  double objective = 0;
+  double maxViolation = 0;
+  double maxUnactuatedResidualDense = 0;
+  int iterations = 0;            // Levenberg-Marquardt iterations
+  int newtonSteps = 0;
+  double seconds = 0;
+  bool kept = false;             // its motion is the result
+};
+
+struct RefinedSolve {
+  std::unique_ptr<SpacetimeProblem> problem;  // the last transcription's problem and motion
+  SolverSummary summary;                      // its solve, with time and iterations of all
+  ValidityReport validity;                    // of the final motion
+  std::vector<TranscriptionAttempt> attempts; // in the order tried, the scene's transcription first
+  bool valid = false;                         // the kept motion converged and passes every check
+};
+
+// The next finer transcription after `spec`, or false if `options` allow none.
+bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer);
+
+// Solves `problem` (built from its scene) and refines as above. The progress callback and cancel
+// flag apply to every solve; options.maxSeconds bounds them all together. The returned problem is
+// `problem` itself when no refinement ran.
+RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptions options,
+                          const RefinementOptions& refinement, const ProgressCallback& callback = nullptr,
+                          const std::atomic<bool>* cancel = nullptr);
+
+}  // namespace spacetime
