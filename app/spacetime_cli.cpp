@@ -9,6 +9,8 @@
 // before anything is written); 3 the solve did not converge; 4 it converged but the validity
 // report fails - the constraints hold at the samples while the motion is not physical between
 // them (a transcription too coarse for it), which a batch job must not take for a good motion.
+// Before exiting 3 or 4 the solve refines the transcription (solver/refinement.h) up to
+// --max-refinements times and writes the best motion it found.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>

@@ -2,6 +2,7 @@
 #include "core/shape_mesh.h"
 
 #include <cmath>
+#include <limits>
 
 namespace spacetime {
 namespace {
@@ -167,6 +168,28 @@ TriangleMesh geometryMesh(const Geometry& geometry) {
   for (const ShapePiece& piece : geometryPieces(geometry))
     mesh.append(unitShapeMesh(piece.shape), piece.placement);
   return mesh;
+}
+
+double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const ShapePiece& piece : geometryPieces(geometry)) {
+    // A unit-shape point u lands at height c + a.u: a is the world y row of the piece's linear
+    // map, c the height of its centre. The minimum of a linear function over each convex unit
+    // shape is closed-form: over the cube's corners, the sphere's surface (-|a|), and the
+    // cylinder's or cone's end discs (radius 1 in the x-z plane of u, at u_y = -1/2 or +1/2).
+    const Eigen::Vector3d a = (rotation * piece.placement.linear()).row(1).transpose();
+    const double c = (rotation * piece.placement.translation() + origin).y();
+    const double disc = std::hypot(a.x(), a.z());
+    double low = 0;
+    switch (piece.shape) {
+      case UnitShape::Cube: low = c - 0.5 * a.cwiseAbs().sum(); break;
+      case UnitShape::Sphere: low = c - a.norm(); break;
+      case UnitShape::Cylinder: low = c - 0.5 * std::abs(a.y()) - disc; break;
+      case UnitShape::Cone: low = std::min(c + 0.5 * a.y(), c - 0.5 * a.y() - disc); break;  // apex, base disc
+    }
+    lowest = std::min(lowest, low);
+  }
+  return lowest;
 }
 
 }  // namespace spacetime

@@ -103,6 +103,11 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
     val["worst_clearance_term"] = v.worstClearanceTerm;
   }
   val["max_rest_speed"] = v.maxRestSpeed;
+  val["max_ground_penetration"] = v.maxGroundPenetration;
+  if (!v.worstGroundPenetrationBody.empty()) {
+    val["worst_ground_penetration_time"] = v.worstGroundPenetrationTime;
+    val["worst_ground_penetration_body"] = v.worstGroundPenetrationBody;
+  }
   val["max_forward_simulation_error"] = v.maxForwardSimulationError;
   json flights = json::array();
   for (const FlightCheck& f : v.flights)

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 
 #include "core/shape_mesh.h"
 
@@ -97,6 +99,36 @@ TEST(ShapeMesh, MirroredPlacementKeepsTrianglesOutward) {
   m.append(unitShapeMesh(UnitShape::Cone), Eigen::Affine3d(Eigen::Scaling(Eigen::Vector3d(1, -2, 0.5))));
   expectOutwardTriangles(m);
   EXPECT_NEAR(enclosedVolume(m) / (M_PI / 3), 1.0, 0.02);
+}
+
+// lowestHeight is exact: in the body frame it is the shape's analytic bottom, and in any pose it
+// lies at or just below the lowest vertex of the shape's own mesh (the mesh is inscribed: its
+// facets cut at most 2 % of a radius off a sphere or a cylinder's rim with 24 slices).
+TEST(ShapeMesh, LowestHeightIsTheShapesBottomInEveryPose) {
+  Geometry box{GeometryKind::Box, Eigen::Vector3d(0.3, 0.04, 0.16), 1, Eigen::Vector3d(0, 0.02, 0)};
+  Geometry capsule{GeometryKind::Capsule, Eigen::Vector3d(0.015, 0.25, 0), 1, Eigen::Vector3d(0, 0.125, 0)};
+  Geometry cylinder{GeometryKind::Cylinder, Eigen::Vector3d(0.06, 0.14, 0), 0, Eigen::Vector3d(0.06, 0, 0)};
+  Geometry sphere{GeometryKind::Sphere, Eigen::Vector3d(0.1, 0, 0), 1, Eigen::Vector3d(0.2, -0.1, 0.3)};
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d at(1, 2, 3);
+  EXPECT_NEAR(lowestHeight(box, I, at), 2 + 0.02 - 0.02, 1e-15);
+  EXPECT_NEAR(lowestHeight(capsule, I, at), 2 + 0.125 - 0.125 - 0.015, 1e-15);
+  EXPECT_NEAR(lowestHeight(cylinder, I, at), 2 - 0.06, 1e-15);  // along x: its rim
+  EXPECT_NEAR(lowestHeight(sphere, I, at), 2 - 0.1 - 0.1, 1e-15);
+  EXPECT_EQ(lowestHeight(Geometry{}, I, at), std::numeric_limits<double>::infinity());
+  std::srand(7);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Matrix3d R = Eigen::Quaterniond(Eigen::Vector4d::Random().normalized()).toRotationMatrix();
+    const Eigen::Vector3d origin = Eigen::Vector3d::Random();
+    for (const Geometry* g : {&box, &capsule, &cylinder, &sphere}) {
+      double meshLowest = 1e300;
+      for (const Eigen::Vector3f& p : geometryMesh(*g).positions)
+        meshLowest = std::min(meshLowest, (R * p.cast<double>() + origin).y());
+      const double exact = lowestHeight(*g, R, origin);
+      EXPECT_LE(exact, meshLowest + 1e-6) << "trial " << trial;  // float vertices
+      EXPECT_GE(exact, meshLowest - 0.02 * g->size.maxCoeff()) << "trial " << trial;
+    }
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "split_landing.h"
 #include "staggered_lamps.h"
 #include "core/scene_io.h"
+#include "core/shape_mesh.h"
 #include "dynamics/algorithms.h"
 #include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
@@ -210,6 +211,42 @@ TEST(LuxoValidity, NamesTheClearanceTermAndInstantThatDips) {
   EXPECT_TRUE(named);
   const std::string summary = summaryJson(SolverSummary(), v, *problem);
   EXPECT_NE(summary.find("\"worst_clearance_term\": \"head_up_high\""), std::string::npos) << summary;
+}
+
+// How far a body's geometry dips under the floor, against the body's own mesh at the worst
+// instant (the exact shape lies at most 2 % of the head's radius below the inscribed mesh), and
+// raising the floor by 5 cm under the same motion deepens it by exactly 5 cm. The solved jump's
+// head does dip at the landing: the solver keeps only contact and clearance points above the
+// ground (reported, not yet a pass/fail check).
+TEST(LuxoValidity, MeasuresHowFarABodyDipsUnderTheFloor) {
+  SolverSummary s;
+  const auto problem = solved(luxoScene(), &s, 2);
+  ASSERT_TRUE(s.converged) << s.reason;
+  const ValidityReport v = checkValidity(*problem);
+  ASSERT_EQ(v.worstGroundPenetrationBody, "luxo.head");
+  EXPECT_GT(v.maxGroundPenetration, 0.01);
+  const Model<double>& model = *problem->characters()[0].model;
+  Data<double> data(model);
+  const Eigen::VectorXd q = problem->jointState(0, v.worstGroundPenetrationTime, 0);
+  forwardKinematics(model, data, q.data());
+  const Transform<double>& X = data.X_world[model.bodyIndex("head")];
+  const Geometry& head = problem->scene().characters[0].bodies[3].geometry;
+  double meshLowest = 1e300;
+  for (const Eigen::Vector3f& p : geometryMesh(head).positions)
+    meshLowest = std::min(meshLowest, pointPosition(X, Eigen::Vector3d(p.cast<double>())).y());
+  EXPECT_GE(v.maxGroundPenetration, -meshLowest - 1e-6);
+  EXPECT_LE(v.maxGroundPenetration, -meshLowest + 0.02 * head.size[0]);
+
+  Scene raised = problem->scene();
+  raised.groundHeight += 0.05;
+  std::string error;
+  auto same = SpacetimeProblem::build(raised, &error);
+  ASSERT_TRUE(same) << error;
+  ASSERT_TRUE(same->restore(problem->state()));
+  const ValidityReport deeper = checkValidity(*same);
+  EXPECT_NEAR(deeper.maxGroundPenetration, v.maxGroundPenetration + 0.05, 1e-12);
+  const std::string summary = summaryJson(SolverSummary(), v, *problem);
+  EXPECT_NE(summary.find("\"worst_ground_penetration_body\": \"luxo.head\""), std::string::npos);
 }
 
 // The root's curves at random variables: velocity and acceleration are the time derivatives

@@ -39,4 +39,10 @@ std::vector<ShapePiece> geometryPieces(const Geometry& geometry);
 // The geometry as one mesh in the body frame (empty for GeometryKind::None).
 TriangleMesh geometryMesh(const Geometry& geometry);
 
+// The world height (y) of the lowest point of a body's geometry when the body frame is at
+// `origin` with orientation `rotation` (body to world): exact for the shapes themselves, not
+// their meshes (a sphere's lowest point lies between the mesh's vertices). +infinity for
+// GeometryKind::None.
+double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin);
+
 }  // namespace spacetime
