@@ -126,8 +126,8 @@ int main(int argc, char** argv) {
   problem = std::move(solved.problem);
   const SolverSummary& summary = solved.summary;
   const ValidityReport& validity = solved.validity;
-  for (const TranscriptionAttempt& a : solved.attempts)
-    if (solved.attempts.size() > 1)
+  if (solved.attempts.size() > 1)  // the transcriptions tried, when the solve refined
+    for (const TranscriptionAttempt& a : solved.attempts)
       std::fprintf(stderr, "transcription %g control points/s, s = %d: %s%s, objective %.9g, dense-grid residual %.3g of weight, %.3f s%s\n",
                    a.controlPointsPerSecond, a.samplesPerSegment, toString(a.status).c_str(),
                    a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,

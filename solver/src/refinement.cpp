@@ -31,7 +31,8 @@ bool atLeastAsGood(const TranscriptionAttempt& a, const TranscriptionAttempt& b)
   return rank(a) > 0 || !(a.maxViolation > b.maxViolation);
 }
 
-std::string describe(const TranscriptionAttempt& a, const ValidityReport& validity) {
+// Why the next transcription is tried: how this one's solve ended, or its first failing check.
+std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCheck>& checks) {
   std::ostringstream why;
   if (!a.converged) {
     why << "the solve at " << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
@@ -40,7 +41,7 @@ std::string describe(const TranscriptionAttempt& a, const ValidityReport& validi
   }
   why << "the motion at " << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
       << " failed";
-  for (const ValidityCheck& c : validityChecklist(validity))
+  for (const ValidityCheck& c : checks)
     if (!c.pass) {
       why << " " << c.name;
       if (!c.yesNo) why << " (" << c.value << " " << c.unit << ", limit " << c.limit << ")";
@@ -93,7 +94,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.newtonSteps += summary.newtonSteps;
     total.jacobianSeconds += summary.jacobianSeconds;
     total.linearSolverSeconds += summary.linearSolverSeconds;
-    const std::string failure = describe(attempt, validity);
+    const std::string failure = describe(attempt, checks);
     // A finer transcription's result replaces the best so far unless it is worse (a finer solve
     // that stalled never replaces a converged motion the user could already look at).
     if (bestAttempt < 0 || atLeastAsGood(attempt, best.attempts[bestAttempt])) {
@@ -120,7 +121,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // steps first, then the penalty restarted at warmRestartPenalty); after a stalled one its
     // multipliers and penalty start afresh, as a cold solve's would: the stalled penalty only
     // holds the iterate where it stalled. Measured on the ladder's 0.9 / 1.2 / 1.5 m rungs: every
-    // rung valid this way (4.5 / 34 / 33 s); restarting after converged solves too was faster on
+    // rung valid this way (15 / 34 / 33 s); restarting after converged solves too was faster on
     // the first two (4.1 / 12.6 s) and left the 1.5 m rung stalled at 45 control points per second.
     const bool transferred = problem->initializeFrom(*best.problem) > 0;
     options.warmStart = transferred && best.summary.converged;

@@ -7,8 +7,8 @@
 #include <map>
 #include <tuple>
 
-#include "dynamics/algorithms.h"
 #include "core/shape_mesh.h"
+#include "dynamics/algorithms.h"
 #include "dynamics/contact_points.h"
 #include "solver/animation.h"
 #include "solver/formula_series.h"

@@ -11,13 +11,14 @@
 // per-sample forces per interval: the stance's ground forces and the root's polynomial follow
 // the joints more closely), rebuilds the problem, starts it from the best motion so far
 // (SpacetimeProblem::initializeFrom: joint splines re-fitted, root data and forces resampled)
-// and solves it with fresh multipliers. It stops at the first
+// and solves it - warm after a converged solve, with fresh multipliers after a stalled one. It
+// stops at the first
 // transcription whose motion converges and passes every validity check, when the refinement
 // budget is spent, or when a solve stops for a reason a finer transcription cannot change
 // (cancelled, out of time, numerical failure, invalid options).
 //
 // The refinement is uniform: every interval gets finer, also where the residual was small.
-// Measured on the jump ladder (tests/scenes/ladder/; docs/STATUS.md, "Automatic refinement").
+// Measured on the jump ladder (tests/scenes/ladder/; docs/STATUS.md, "Solver core (issue 29)").
 #pragma once
 
 #include <atomic>
@@ -56,8 +57,8 @@ struct TranscriptionAttempt {
 };
 
 struct RefinedSolve {
-  std::unique_ptr<SpacetimeProblem> problem;  // the last transcription's problem and motion
-  SolverSummary summary;                      // its solve, with time and iterations of all
+  std::unique_ptr<SpacetimeProblem> problem;  // the kept transcription's problem and motion
+  SolverSummary summary;                      // its solve, with the time and iterations of all
   ValidityReport validity;                    // of the final motion
   std::vector<TranscriptionAttempt> attempts; // in the order tried, the scene's transcription first
   bool valid = false;                         // the kept motion converged and passes every check
