@@ -473,7 +473,10 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("solver")) {
     const json& t = root["solver"];
-    r.allowKeys(t, "solver", {"maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty"});
+    r.allowKeys(t, "solver", {"maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty",
+                                  "bodiesAboveGround"});
+    if (t.contains("bodiesAboveGround"))
+      s.solver.bodiesAboveGround = r.boolean(t["bodiesAboveGround"], "solver.bodiesAboveGround");
     if (t.contains("maxOuterIterations"))
       s.solver.maxOuterIterations = r.integer(t["maxOuterIterations"], "solver.maxOuterIterations", 1, 1000);
     if (t.contains("maxInnerIterations"))
@@ -712,7 +715,8 @@ std::string sceneToJson(const Scene& s) {
   root["solver"] = {{"maxOuterIterations", s.solver.maxOuterIterations},
                     {"maxInnerIterations", s.solver.maxInnerIterations},
                     {"tolerance", s.solver.tolerance},
-                    {"maxPenalty", s.solver.maxPenalty}};
+                    {"maxPenalty", s.solver.maxPenalty},
+                    {"bodiesAboveGround", s.solver.bodiesAboveGround}};
   json chars = json::array();
   for (const auto& c : s.characters) {
     json jc;

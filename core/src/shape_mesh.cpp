@@ -1,6 +1,7 @@
 // Triangle meshes of body geometry (see shape_mesh.h).
 #include "core/shape_mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -190,6 +191,44 @@ double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, c
     lowest = std::min(lowest, low);
   }
   return lowest;
+}
+
+double LowestPointFeature::lowestHeight(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin) const {
+  double h = (rotation * point + origin).y() - margin;
+  if (isDisc()) {
+    const double ny = (rotation * discNormal).y();
+    h -= discRadius * std::sqrt(std::max(0.0, 1 - ny * ny));
+  }
+  return h;
+}
+
+std::vector<LowestPointFeature> lowestPointFeatures(const Geometry& g) {
+  std::vector<LowestPointFeature> features;
+  const double r = g.size[0], halfLength = 0.5 * g.size[1];
+  const Eigen::Vector3d axis = Eigen::Vector3d::Unit(std::clamp(g.axis, 0, 2));
+  switch (g.kind) {
+    case GeometryKind::None: break;
+    case GeometryKind::Box:
+      // A linear function's minimum over a box is at a corner.
+      for (int corner = 0; corner < 8; ++corner) {
+        Eigen::Vector3d p = g.offset;
+        for (int k = 0; k < 3; ++k) p[k] += ((corner >> k) & 1 ? 0.5 : -0.5) * g.size[k];
+        features.push_back({p, 0, Eigen::Vector3d::Zero(), 0});
+      }
+      break;
+    case GeometryKind::Sphere: features.push_back({g.offset, r, Eigen::Vector3d::Zero(), 0}); break;
+    case GeometryKind::Capsule:
+      // The segment swept by a ball: lowest at one of the segment's ends, one radius down.
+      for (double end : {-halfLength, halfLength})
+        features.push_back({g.offset + end * axis, r, Eigen::Vector3d::Zero(), 0});
+      break;
+    case GeometryKind::Cylinder:
+      // Lowest on the rim of one of the end discs.
+      for (double end : {-halfLength, halfLength})
+        features.push_back({g.offset + end * axis, 0, axis, r});
+      break;
+  }
+  return features;
 }
 
 }  // namespace spacetime

@@ -491,6 +491,37 @@ void ClearanceKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(ClearanceKernel)
 
+// --- GroundClearanceKernel ---------------------------------------------------------------
+
+GroundClearanceKernel::GroundClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
+                                             std::vector<LowestPointFeature> features,
+                                             double groundHeight, std::string label)
+    : model_(std::move(model)), body_(body), features_(std::move(features)), ground_(groundHeight) {
+  label_ = std::move(label);
+  inputs_ = model_->dofCount();
+  kinds_.assign(features_.size(), RowKind::Inequality);
+}
+
+template <class T>
+void GroundClearanceKernel::compute(const T* z, T* rows) const {
+  using std::sqrt;
+  constexpr double kEpsilon = 1e-3;
+  const Transform<T> X = bodyPose(*model_, z, body_);  // world point = E^T p + r
+  for (size_t i = 0; i < features_.size(); ++i) {
+    const LowestPointFeature& f = features_[i];
+    T row = T(ground_ + f.margin) - pointPosition(X, f.point).y();
+    if (f.isDisc()) {
+      T ny = T(0);  // (E^T n)_y
+      for (int k = 0; k < 3; ++k) ny += X.E(k, 1) * f.discNormal[k];
+      T across = T(1) - ny * ny;
+      if (across < T(0)) across = T(0);
+      row += f.discRadius * sqrt(across + T(kEpsilon * kEpsilon));
+    }
+    rows[i] = row;
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(GroundClearanceKernel)
+
 // --- JointLimitKernel --------------------------------------------------------------------
 
 JointLimitKernel::JointLimitKernel(std::shared_ptr<const Model<double>> model, std::string label)

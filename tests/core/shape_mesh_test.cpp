@@ -131,5 +131,27 @@ TEST(ShapeMesh, LowestHeightIsTheShapesBottomInEveryPose) {
   }
 }
 
+// The features the solver keeps above the ground find the same lowest point as lowestHeight's
+// closed forms (an independent route: corners, end centres, rims), in random poses.
+TEST(ShapeMesh, LowestPointFeaturesFindTheShapesBottom) {
+  const std::vector<Geometry> shapes = {
+      {GeometryKind::Box, Eigen::Vector3d(0.3, 0.04, 0.16), 1, Eigen::Vector3d(0, 0.02, 0)},
+      {GeometryKind::Capsule, Eigen::Vector3d(0.015, 0.25, 0), 2, Eigen::Vector3d(0, 0.125, 0.1)},
+      {GeometryKind::Cylinder, Eigen::Vector3d(0.06, 0.14, 0), 0, Eigen::Vector3d(0.06, 0, 0)},
+      {GeometryKind::Sphere, Eigen::Vector3d(0.1, 0, 0), 1, Eigen::Vector3d(0.2, -0.1, 0.3)}};
+  EXPECT_TRUE(lowestPointFeatures(Geometry{}).empty());
+  EXPECT_EQ(lowestPointFeatures(shapes[0]).size(), 8u);
+  std::srand(11);
+  for (int trial = 0; trial < 500; ++trial) {
+    const Eigen::Matrix3d R = Eigen::Quaterniond(Eigen::Vector4d::Random().normalized()).toRotationMatrix();
+    const Eigen::Vector3d origin = Eigen::Vector3d::Random();
+    for (const Geometry& g : shapes) {
+      double lowest = 1e300;
+      for (const LowestPointFeature& f : lowestPointFeatures(g)) lowest = std::min(lowest, f.lowestHeight(R, origin));
+      EXPECT_NEAR(lowest, lowestHeight(g, R, origin), 1e-12) << "trial " << trial;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace spacetime

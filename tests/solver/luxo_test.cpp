@@ -58,6 +58,7 @@ class LuxoSamples : public ::testing::TestWithParam<int> {};
 TEST_P(LuxoSamples, FreeFallIsAProjectile) {
   Scene scene = luxoScene();
   scene.endTime = 0.4;
+  scene.groundEnabled = false;  // it falls 0.78 m from where it stands
   scene.transcription.samplesPerSegment = GetParam();
   std::vector<TermSpec> kept;
   for (const TermSpec& t : scene.terms)
@@ -215,16 +216,37 @@ TEST(LuxoValidity, NamesTheClearanceTermAndInstantThatDips) {
 
 // How far a body's geometry dips under the floor, against the body's own mesh at the worst
 // instant (the exact shape lies at most 2 % of the head's radius below the inscribed mesh), and
-// raising the floor by 5 cm under the same motion deepens it by exactly 5 cm. The solved jump's
-// head does dip at the landing: the solver keeps only contact and clearance points above the
-// ground (reported, not yet a pass/fail check).
+// raising the floor by 5 cm under the same motion deepens it by exactly 5 cm. Solved without
+// the automatic ground clearances (SolverSpec::bodiesAboveGround), the jump's head dips 5.3 cm
+// under the floor at the landing and the checklist fails it; with them (the default) every body
+// stays above it on the dense grid and every check passes.
 TEST(LuxoValidity, MeasuresHowFarABodyDipsUnderTheFloor) {
+  Scene through = luxoScene();
+  through.solver.bodiesAboveGround = false;
   SolverSummary s;
-  const auto problem = solved(luxoScene(), &s, 2);
+  const auto problem = solved(through, &s, 2);
   ASSERT_TRUE(s.converged) << s.reason;
   const ValidityReport v = checkValidity(*problem);
   ASSERT_EQ(v.worstGroundPenetrationBody, "luxo.head");
   EXPECT_GT(v.maxGroundPenetration, 0.01);
+  int failing = 0;
+  for (const ValidityCheck& c : validityChecklist(v))
+    if (!c.pass) {
+      ++failing;
+      EXPECT_NE(c.name.find("bodies above the ground"), std::string::npos) << c.name;
+      EXPECT_NE(c.name.find("luxo.head"), std::string::npos) << c.name;
+      ASSERT_TRUE(c.time.has_value());
+      EXPECT_EQ(*c.time, v.worstGroundPenetrationTime);
+    }
+  EXPECT_EQ(failing, 1);
+
+  SolverSummary kept;
+  const auto above = solved(luxoScene(), &kept, 2);
+  ASSERT_TRUE(kept.converged) << kept.reason;
+  const ValidityReport va = checkValidity(*above);
+  EXPECT_LT(va.maxGroundPenetration, 1e-4);
+  for (const ValidityCheck& c : validityChecklist(va)) EXPECT_TRUE(c.pass) << c.name << ": " << c.value;
+
   const Model<double>& model = *problem->characters()[0].model;
   Data<double> data(model);
   const Eigen::VectorXd q = problem->jointState(0, v.worstGroundPenetrationTime, 0);

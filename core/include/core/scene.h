@@ -142,6 +142,9 @@ struct SolverSpec {
   // into the nearest feasible point: luxo_jump's effort optimum fell from 134.5 to 17.53.
   static constexpr double kMinPenalty = 100;  // the penalty a cold solve starts from
   double maxPenalty = 1e7;
+  // Keep every body's geometry above the ground outside its own contacts (automatic ground
+  // clearances on each shape's lowest-point features; characters with a fixed root excepted).
+  bool bodiesAboveGround = true;
 };
 
 // A solved motion saved with the scene so reopening shows it: the solver's variables and

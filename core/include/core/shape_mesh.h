@@ -45,4 +45,24 @@ TriangleMesh geometryMesh(const Geometry& geometry);
 // GeometryKind::None.
 double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin);
 
+// A place where a shape's lowest point can be, in the body frame: a point, a sphere of radius
+// `margin` around it, or a disc of radius `discRadius` around it, normal to the unit vector
+// `discNormal`. Its lowest world height with the body at (rotation, origin) is
+//   (R p + o)_y - margin - discRadius sqrt(1 - (R n)_y^2).
+// The solver keeps each one above the ground (smooth rows, unlike lowestHeight's minimum).
+struct LowestPointFeature {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  double margin = 0;
+  Eigen::Vector3d discNormal = Eigen::Vector3d::Zero();  // zero: not a disc
+  double discRadius = 0;
+
+  bool isDisc() const { return discRadius > 0; }
+  double lowestHeight(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin) const;
+};
+
+// The features whose lowest is the geometry's lowest point in every pose: a box's eight corners,
+// a sphere's centre (margin: the radius), a capsule's two end centres (margin: the radius), a
+// cylinder's two end discs. None for GeometryKind::None.
+std::vector<LowestPointFeature> lowestPointFeatures(const Geometry& geometry);
+
 }  // namespace spacetime

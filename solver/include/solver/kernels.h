@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/expr/tape.h"
+#include "core/shape_mesh.h"
 #include "dynamics/contact_points.h"
 #include "dynamics/model.h"
 
@@ -250,6 +251,23 @@ class ClearanceKernel : public Kernel {
   double height_ = 0;
   bool box_ = false;
   Eigen::Vector3d boxMin_, boxMax_;
+};
+
+// A body's geometry stays above the ground: one row per place its lowest point can be
+// (core/shape_mesh.h, LowestPointFeature): ground - lowest <= 0. A disc's rim term
+// r sqrt(1 - n_y^2) is smoothed to r sqrt(1 - n_y^2 + eps^2), eps = 1e-3, which keeps the row
+// differentiable when the disc lies flat and errs on the safe side by at most r eps. z = q.
+class GroundClearanceKernel : public Kernel {
+ public:
+  GroundClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
+                        std::vector<LowestPointFeature> features, double groundHeight, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  int body_;
+  std::vector<LowestPointFeature> features_;
+  double ground_;
 };
 
 // Joint position limits: q - upper <= 0 and lower - q <= 0 for limited dofs. z = q.

@@ -268,6 +268,8 @@ class SpacetimeProblem {
   // when event < 0, rebuilt at every evaluation otherwise.
   using Fill = std::function<void(InputMap&, double T)>;
   void addResidualAt(std::shared_ptr<const Kernel> kernel, int event, const Fill& fill);
+  // Every body's geometry above the ground outside its contacts (SolverSpec::bodiesAboveGround).
+  void addGroundClearances();
   // The time reference of t for character c (see TimeRef): moving inside a free end's window.
   // The root interval is the one `side` picks at a breakpoint (Side::After: a flight's first
   // instant reads the interval that starts there).

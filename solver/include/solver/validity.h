@@ -69,8 +69,7 @@ struct ValidityReport {
   std::string worstClearanceTerm;
   double maxRestSpeed = 0;                  // largest |qd| at the rest terms
   // How far any body's geometry dips below the ground on the dense grid (m; 0 when none does),
-  // outside the contacts that hold that body on it; when and which body. Reported, not yet in
-  // validityChecklist: the solver does not yet keep whole bodies above the ground.
+  // outside the contacts that hold that body on it; when and which body. Passes at <= 1 mm.
   double maxGroundPenetration = 0;
   double worstGroundPenetrationTime = 0;
   std::string worstGroundPenetrationBody;
