@@ -29,14 +29,21 @@ class Reader {
  public:
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
+  // Paths hold the file's own keys, which may be any length: messages stay one short line.
   [[noreturn]] void fail(const std::string& path, const std::string& what) const {
-    throw SceneFormatError{file_ + ": field '" + path + "': " + what};
+    throw SceneFormatError{file_ + ": field '" + shortened(path, 100) + "': " + what};
   }
+  // Objects and arrays are described, not printed: printing recurses through their nesting,
+  // and 100 000 levels of [ overflowed the stack.
   [[noreturn]] void badValue(const std::string& path, const json& v,
                              const std::string& expected) const {
-    std::string shown = v.dump();
-    if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
+    const std::string shown = v.is_object()  ? "an object"
+                              : v.is_array() ? "an array of " + std::to_string(v.size()) + " elements"
+                                             : shortened(v.dump(), 60);
     fail(path, "value " + shown + " is not allowed; expected " + expected);
+  }
+  static std::string shortened(const std::string& text, size_t limit) {
+    return text.size() > limit ? text.substr(0, limit - 3) + "..." : text;
   }
 
   void allowKeys(const json& obj, const std::string& path,
@@ -674,14 +681,41 @@ json writeTerm(const TermSpec& t) {
   return j;
 }
 
+// How deeply arrays and objects nest in JSON text (brackets inside strings skipped). The JSON
+// library parses and copies nested values recursively: 100 000 levels overflowed the stack.
+int nestingDepth(const std::string& text) {
+  int depth = 0, deepest = 0;
+  bool inString = false, escaped = false;
+  for (char ch : text) {
+    if (inString) {
+      if (escaped) escaped = false;
+      else if (ch == '\\') escaped = true;
+      else if (ch == '"') inString = false;
+    } else if (ch == '"') {
+      inString = true;
+    } else if (ch == '[' || ch == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if (ch == ']' || ch == '}') {
+      --depth;
+    }
+  }
+  return deepest;
+}
+
 }  // namespace
 
 SceneLoadResult parseScene(const std::string& text, const std::string& sourceName) {
+  constexpr int kMaxNesting = 64;  // a scene needs 6
   SceneLoadResult result;
+  if (const int depth = nestingDepth(text); depth > kMaxNesting) {
+    result.error = sourceName + ": not a scene: arrays and objects nested " + std::to_string(depth) +
+                   " levels deep (at most " + std::to_string(kMaxNesting) + ")";
+    return result;
+  }
   json root;
   try {
     root = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
     result.error = sourceName + ": not valid JSON: " + e.what();
     return result;
   }

@@ -118,6 +118,15 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(R"({"id": "base", "mass": 1, "inertia": [1, 1, 5]})"), "triangle inequality"},
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
+      {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
+      // A number beyond a double (nlohmann's out_of_range, which used to abort).
+      {minimalWith(R"({"id": "base", "mass": 1e999})"), "not valid JSON"},
+      // 100 000 levels of nesting (parsing and printing them overflowed the stack), and a few
+      // where an object belongs, described rather than printed.
+      {std::string(100000, '[') + std::string(100000, ']'), "nested 100000 levels deep (at most 64)"},
+      {minimalWith(body, "[]", R"("gravity": )" + std::string(100000, '[') + std::string(100000, ']') + ","),
+       "levels deep (at most 64)"},
+      {minimalWith(body, "[]", R"("gravity": [[[[1]]]], "name": "]]]]]]]]",)"), "gravity': value an array of 1 elements"},
   };
   for (const auto& c : cases) {
     const SceneLoadResult r = parseScene(c.json, "bad.json");
@@ -125,6 +134,14 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
     EXPECT_EQ(r.error.rfind("bad.json", 0), 0u) << r.error;
     EXPECT_NE(r.error.find(c.mustMention), std::string::npos) << r.error;
   }
+  // A 100 kB unknown key is named, shortened: the message stays one short line.
+  const std::string longKey(100000, 'k');
+  const SceneLoadResult longName = parseScene(
+      minimalWith(body, R"([{"id": "k", "type": "keyframe", "character": "c", "time": 0.5, "values": {")" + longKey + R"(": 1}}])"),
+      "bad.json");
+  EXPECT_FALSE(longName.scene);
+  EXPECT_LT(longName.error.size(), 400u) << longName.error.size();
+  EXPECT_NE(longName.error.find("unknown degree of freedom"), std::string::npos) << longName.error.substr(0, 300);
   const SceneLoadResult missing = loadSceneFile("/no/such/scene.json");
   EXPECT_FALSE(missing.scene);
   EXPECT_NE(missing.error.find("/no/such/scene.json"), std::string::npos);

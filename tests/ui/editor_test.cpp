@@ -389,6 +389,15 @@ class EditorTest : public QObject {
     QCOMPARE(niceTickInterval(1.0), 0.2);
     QVERIFY(std::abs(niceTickInterval(0.013) - 0.002) < 1e-15);
     QCOMPARE(niceTickInterval(0.0), 1.0);
+    // Every value axis has a handful of ticks: flat series (zero, or a constant 1000), wide ones,
+    // empty data.
+    for (const auto& [lo, hi] : std::vector<std::pair<double, double>>{
+             {0, 0}, {1000, 1000}, {-1e-12, 1e-12}, {-3, 250}, {0.2, 0.2000001}, {1, -1}}) {
+      const ValueAxisRange r = valueAxisRange(lo, hi);
+      const double ticks = (r.max - r.min) / r.tickInterval;
+      QVERIFY2(ticks >= 2 && ticks <= 20, qPrintable(QString("[%1, %2]: %3 ticks").arg(lo).arg(hi).arg(ticks)));
+      if (lo <= hi) QVERIFY(r.min < lo && r.max > hi);
+    }
     MainWindow w;
     QVERIFY(openLuxo(w));
     w.solve();

@@ -43,6 +43,17 @@ double niceTickInterval(double span, int ticks) {
   return (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * decade;
 }
 
+ValueAxisRange valueAxisRange(double lo, double hi) {
+  if (!(lo <= hi) || !std::isfinite(lo) || !std::isfinite(hi)) { lo = -1; hi = 1; }
+  const double scale = std::max({1.0, std::abs(lo), std::abs(hi)});
+  if (hi - lo < 1e-6 * scale) {
+    lo -= 0.5 * scale;
+    hi += 0.5 * scale;
+  }
+  const double pad = 0.05 * (hi - lo);
+  return {lo - pad, hi + pad, niceTickInterval(hi - lo + 2 * pad)};
+}
+
 bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QString* error) {
   const std::shared_ptr<const SolvedMotion> motion = doc.motion();
   if (!motion) {
@@ -346,12 +357,15 @@ void GraphPanel::replot() {
   }
   plotted_ = std::move(plotted);
   x->setRange(doc_->scene().startTime, doc_->scene().endTime);
-  if (lo > hi) { lo = -1; hi = 1; }
-  const double pad = std::max(1e-9, 0.05 * (hi - lo));
-  y->setRange(lo - pad, hi + pad);
-  y->setTickType(QValueAxis::TicksDynamic);
+  // Range and interval change with fixed ticks in between: Qt lays the axis out after each
+  // setter, and a flat series' leftover interval (~5e-10) over the next plot's range asked for
+  // ~1e9 ticks - the editor froze with its memory growing ~300 MB/s.
+  const ValueAxisRange range = valueAxisRange(lo, hi);
+  y->setTickType(QValueAxis::TicksFixed);
+  y->setRange(range.min, range.max);
   y->setTickAnchor(0);
-  y->setTickInterval(niceTickInterval(hi - lo + 2 * pad));
+  y->setTickInterval(range.tickInterval);
+  y->setTickType(QValueAxis::TicksDynamic);
   view_->cursorTime = doc_->currentTime();
   view_->viewport()->update();
 }

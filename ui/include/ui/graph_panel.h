@@ -29,6 +29,14 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
 // `ticks` ticks, so that the labels read 0, 5, 10 and not 5.59, 12.8, 19.9.
 double niceTickInterval(double span, int ticks = 5);
 
+// The value axis over data in [lo, hi]: padded 5 %, a flat series (an idle joint's zero torque)
+// in a band of its own size or 1, whichever is larger, ticks at niceTickInterval. Empty data
+// (lo > hi): [-1, 1].
+struct ValueAxisRange {
+  double min = -1, max = 1, tickInterval = 0.5;
+};
+ValueAxisRange valueAxisRange(double lo, double hi);
+
 class GraphView : public QChartView {
   Q_OBJECT
  public:
