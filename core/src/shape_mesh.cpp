@@ -193,15 +193,6 @@ double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, c
   return lowest;
 }
 
-double LowestPointFeature::lowestHeight(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin) const {
-  double h = (rotation * point + origin).y() - margin;
-  if (isDisc()) {
-    const double ny = (rotation * discNormal).y();
-    h -= discRadius * std::sqrt(std::max(0.0, 1 - ny * ny));
-  }
-  return h;
-}
-
 std::vector<LowestPointFeature> lowestPointFeatures(const Geometry& g) {
   std::vector<LowestPointFeature> features;
   const double r = g.size[0], halfLength = 0.5 * g.size[1];

@@ -504,21 +504,11 @@ GroundClearanceKernel::GroundClearanceKernel(std::shared_ptr<const Model<double>
 
 template <class T>
 void GroundClearanceKernel::compute(const T* z, T* rows) const {
-  using std::sqrt;
-  constexpr double kEpsilon = 1e-3;
+  constexpr double kSmoothing = 1e-3;
   const Transform<T> X = bodyPose(*model_, z, body_);  // world point = E^T p + r
-  for (size_t i = 0; i < features_.size(); ++i) {
-    const LowestPointFeature& f = features_[i];
-    T row = T(ground_ + f.margin) - pointPosition(X, f.point).y();
-    if (f.isDisc()) {
-      T ny = T(0);  // (E^T n)_y
-      for (int k = 0; k < 3; ++k) ny += X.E(k, 1) * f.discNormal[k];
-      T across = T(1) - ny * ny;
-      if (across < T(0)) across = T(0);
-      row += f.discRadius * sqrt(across + T(kEpsilon * kEpsilon));
-    }
-    rows[i] = row;
-  }
+  const Mat3<T> rotation = X.E.transpose();
+  for (size_t i = 0; i < features_.size(); ++i)
+    rows[i] = T(ground_) - features_[i].lowestHeight(rotation, X.r, kSmoothing);
 }
 SPACETIME_DEFINE_EVALUATORS(GroundClearanceKernel)
 

@@ -142,19 +142,15 @@ int SpacetimeProblem::characterIndex(const std::string& id) const {
 }
 
 // Automatic ground clearances (SolverSpec::bodiesAboveGround): each body with geometry keeps its
-// lowest-point features above the ground at every sample of its character, except while one of
-// its own contacts holds it (the contact's anchors put its points on the ground, and a resting
-// box touches it along a face), and except where a clearance term of the scene already holds the
-// same point at least as high. A character bolted to the world (a fixed root) is left as it was
-// built: where its base meets the floor is the animator's setup, not something a motion can fix.
-// Held at the samples and halfway between them: at the samples alone the lamp's head corner dipped
+// lowest-point features above the ground at every sample of its character where it must
+// (mustClearGround), except where a clearance term of the scene already holds the same point at
+// least as high. Held at the samples and halfway between them: at the samples alone the lamp's head corner dipped
 // 2.6 mm between two of them when it chose its own lift-off; halfway too, ~1e-5 m (luxo_jump
 // 0.94 s instead of 0.66 s). The validity report checks every body on the dense grid.
 void SpacetimeProblem::addGroundClearances() {
   for (size_t c = 0; c < characters_.size(); ++c) {
     const CharacterVariables& cv = characters_[c];
     const CharacterSpec& spec = scene_.characters[c];
-    if (spec.root == RootKind::Fixed) continue;
     const bool planar = turnsAboutZOnly(*cv.model);
     const std::vector<double> times =
         densified(intervalTimes(transcription_, spec.id, scene_.startTime, scene_.endTime), 2);
@@ -165,11 +161,7 @@ void SpacetimeProblem::addGroundClearances() {
       if (features.empty() || body < 0) continue;
       const std::string label = "'" + spec.id + "." + bs.id + "' above the ground";
       for (double time : times) {
-        if (std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
-              return ct.character == static_cast<int>(c) && ct.points.body == body &&
-                     time >= ct.start - kTimeTolerance && time <= ct.end + kTimeTolerance;
-            }))
-          continue;
+        if (!mustClearGround(static_cast<int>(c), body, time)) continue;
         std::vector<LowestPointFeature> held;
         for (const LowestPointFeature& f : features) {
           const bool covered = std::any_of(scene_.terms.begin(), scene_.terms.end(), [&](const TermSpec& t) {
@@ -191,6 +183,12 @@ void SpacetimeProblem::addGroundClearances() {
       }
     }
   }
+}
+
+bool SpacetimeProblem::mustClearGround(int c, int body, double t) const {
+  if (!scene_.groundEnabled || scene_.characters[c].root == RootKind::Fixed) return false;
+  const std::vector<int> touching = activeContacts(c, t);
+  return std::none_of(touching.begin(), touching.end(), [&](int j) { return contacts_[j].points.body == body; });
 }
 
 std::vector<int> SpacetimeProblem::activeContacts(int c, double t, bool afterEnds) const {

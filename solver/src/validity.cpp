@@ -219,28 +219,22 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, c
       default: break;
     }
   }
-  // Every body's geometry above the ground on the dense grid. A body is exempt only while one of
-  // its own contacts holds it there (their points are checked below, and a box resting on the
-  // floor touches it along a face); any other body, and that body outside its contacts, must
-  // stay above (the solver's automatic ground clearances, SpacetimeProblem::addGroundClearances).
-  // Characters with a fixed root are not checked, as the solver does not hold them.
+  // Every body's geometry above the ground on the dense grid, wherever the solver's automatic
+  // ground clearances hold it (SpacetimeProblem::mustClearGround; a contact's own points are
+  // checked below).
   if (scene.groundEnabled)
     for (size_t c = 0; c < problem.characters().size(); ++c) {
       if (stopped()) return r;
       const CharacterSpec& spec = scene.characters[c];
-      if (spec.root == RootKind::Fixed) continue;  // bolted to the world: its setup, as the solver's
       const Model<double>& model = *problem.characters()[c].model;
       Data<double> data(model);
       for (double s : dense) {
         const Eigen::VectorXd q = problem.jointState(static_cast<int>(c), s, 0);
         forwardKinematics(model, data, q.data());
-        const std::vector<int> touching = problem.activeContacts(static_cast<int>(c), s);
         for (const BodySpec& body : spec.bodies) {
           if (body.geometry.kind == GeometryKind::None) continue;
           const int b = model.bodyIndex(body.id);
-          if (b < 0 || std::any_of(touching.begin(), touching.end(),
-                                   [&](int j) { return problem.contacts()[j].points.body == b; }))
-            continue;
+          if (b < 0 || !problem.mustClearGround(static_cast<int>(c), b, s)) continue;
           const Transform<double>& X = data.X_world[b];  // world point = E^T p + r
           const double depth =
               scene.groundHeight - lowestHeight(body.geometry, X.E.transpose(), X.r);

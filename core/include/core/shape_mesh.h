@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -48,8 +49,10 @@ double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, c
 // A place where a shape's lowest point can be, in the body frame: a point, a sphere of radius
 // `margin` around it, or a disc of radius `discRadius` around it, normal to the unit vector
 // `discNormal`. Its lowest world height with the body at (rotation, origin) is
-//   (R p + o)_y - margin - discRadius sqrt(1 - (R n)_y^2).
-// The solver keeps each one above the ground (smooth rows, unlike lowestHeight's minimum).
+//   (R p + o)_y - margin - discRadius sqrt(1 - (R n)_y^2 + smoothing^2)
+// (exact for smoothing = 0). The solver keeps each one above the ground (smooth rows, unlike
+// lowestHeight's minimum), with the scalar a Jet and a small smoothing that keeps a disc's row
+// differentiable where it lies flat.
 struct LowestPointFeature {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   double margin = 0;
@@ -57,7 +60,19 @@ struct LowestPointFeature {
   double discRadius = 0;
 
   bool isDisc() const { return discRadius > 0; }
-  double lowestHeight(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin) const;
+  template <class T>
+  T lowestHeight(const Eigen::Matrix<T, 3, 3>& rotation, const Eigen::Matrix<T, 3, 1>& origin,
+                 double smoothing = 0) const {
+    using std::sqrt;
+    T height = (rotation * point.cast<T>() + origin).y() - T(margin);
+    if (isDisc()) {
+      const T ny = (rotation * discNormal.cast<T>()).y();
+      T across = T(1) - ny * ny;
+      if (across < T(0)) across = T(0);
+      height -= discRadius * sqrt(across + T(smoothing * smoothing));
+    }
+    return height;
+  }
 };
 
 // The features whose lowest is the geometry's lowest point in every pose: a box's eight corners,

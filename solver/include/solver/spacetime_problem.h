@@ -243,6 +243,13 @@ class SpacetimeProblem {
   // The contacts (indices into contacts()) of character c active at t, interval ends included;
   // with afterEnds, those ending at t left out (the flight side of a lift-off, Sample::after).
   std::vector<int> activeContacts(int character, double t, bool afterEnds = false) const;
+  // Whether body `body` (a model index) of character c must be above the ground at t: the floor
+  // is on, the character is not bolted to the world (a fixed root: where its base meets the
+  // floor is the animator's setup, not something a motion can fix), and no contact of its own
+  // holds that body there at t (the contact's anchors put its points on the ground, and a
+  // resting box touches it along a face). The solver's ground clearances and the validity
+  // report's ground check both ask this.
+  bool mustClearGround(int character, int body, double t) const;
   // The maximal intervals of the clip in which character c touches nothing: the whole clip for
   // a character without contacts.
   std::vector<std::pair<double, double>> flightPhases(int character) const;
