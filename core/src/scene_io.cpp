@@ -165,7 +165,7 @@ Geometry readGeometry(const Reader& r, const json& g, const std::string& path) {
 JointSpec readJoint(const Reader& r, const json& j, const std::string& path) {
   r.allowKeys(j, path,
               {"id", "type", "axis", "origin", "rpy", "pitch", "actuated", "limits",
-               "torqueLimit"});
+               "torqueLimit", "speedLimit"});
   JointSpec js;
   js.id = r.identifier(r.required(j, path, "id"), Reader::join(path, "id"));
   js.kind = r.choice<JointKind>(r.required(j, path, "type"), Reader::join(path, "type"),
@@ -175,8 +175,11 @@ JointSpec readJoint(const Reader& r, const json& j, const std::string& path) {
                                  {"fixed", JointKind::Fixed}});
   if (j.contains("axis")) {
     js.axis = r.vec3(j["axis"], Reader::join(path, "axis"));
-    if (js.axis.norm() < 1e-9) r.badValue(Reader::join(path, "axis"), j["axis"], "a non-zero vector");
-    js.axis.normalize();
+    // Scaled by its largest component first: the squared norm of [0, 0, 1e200] overflows, and
+    // normalising by it gave [0, 0, 0].
+    const double largest = js.axis.cwiseAbs().maxCoeff();
+    if (!(largest > 1e-9)) r.badValue(Reader::join(path, "axis"), j["axis"], "a non-zero vector");
+    js.axis = (js.axis / largest).normalized();
   }
   if (j.contains("origin")) js.origin = r.vec3(j["origin"], Reader::join(path, "origin"));
   if (j.contains("rpy")) js.rpy = r.vec3(j["rpy"], Reader::join(path, "rpy"));
@@ -192,6 +195,8 @@ JointSpec readJoint(const Reader& r, const json& j, const std::string& path) {
   }
   if (j.contains("torqueLimit"))
     js.torqueLimit = r.positive(j["torqueLimit"], Reader::join(path, "torqueLimit"));
+  if (j.contains("speedLimit"))
+    js.speedLimit = r.positive(j["speedLimit"], Reader::join(path, "speedLimit"));
   return js;
 }
 
@@ -584,6 +589,7 @@ json writeBody(const BodySpec& b, bool isRoot) {
     jt["actuated"] = b.joint.actuated;
     if (b.joint.limits) jt["limits"] = json::array({b.joint.limits->first, b.joint.limits->second});
     if (b.joint.torqueLimit) jt["torqueLimit"] = *b.joint.torqueLimit;
+    if (b.joint.speedLimit) jt["speedLimit"] = *b.joint.speedLimit;
     j["joint"] = jt;
   }
   if (b.geometry.kind != GeometryKind::None) {

@@ -99,6 +99,10 @@ Model<double> buildModel(const CharacterSpec& c, const Eigen::Vector3d& gravity)
       b.hasEffortLimit = true;
       b.effortLimit = *s.joint.torqueLimit;
     }
+    if (s.joint.speedLimit) {
+      b.hasSpeedLimit = true;
+      b.speedLimit = *s.joint.speedLimit;
+    }
     index.emplace_back(s.id, m.addBody(b));
   }
   return m;

@@ -123,12 +123,13 @@ UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character
     if (b.joint.type != JointType::Fixed) {
       out << "    <axis xyz=\"" << vec(b.joint.axis) << "\"/>\n";
       const double effort = b.hasEffortLimit ? b.effortLimit : 1e6;
+      const std::string velocity = fmt(b.hasSpeedLimit ? b.speedLimit : 1e6);
       if (type == "revolute" || type == "prismatic") {
         const double lo = b.hasPositionLimits ? b.lower : -1e3, hi = b.hasPositionLimits ? b.upper : 1e3;
         out << "    <limit lower=\"" << fmt(lo) << "\" upper=\"" << fmt(hi) << "\" effort=\""
-            << fmt(effort) << "\" velocity=\"1e6\"/>\n";
+            << fmt(effort) << "\" velocity=\"" << velocity << "\"/>\n";
       } else {
-        out << "    <limit effort=\"" << fmt(effort) << "\" velocity=\"1e6\"/>\n";
+        out << "    <limit effort=\"" << fmt(effort) << "\" velocity=\"" << velocity << "\"/>\n";
       }
     }
     out << "  </joint>\n";

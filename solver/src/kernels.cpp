@@ -533,6 +533,27 @@ void JointLimitKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(JointLimitKernel)
 
+// --- JointSpeedLimitKernel ---------------------------------------------------------------
+
+JointSpeedLimitKernel::JointSpeedLimitKernel(std::shared_ptr<const Model<double>> model, std::string label)
+    : model_(std::move(model)) {
+  label_ = std::move(label);
+  inputs_ = model_->dofCount();
+  for (int d = 0; d < model_->dofCount(); ++d)
+    if (model_->bodies[model_->dofBody[d]].hasSpeedLimit) dofs_.push_back(d);
+  kinds_.assign(2 * dofs_.size(), RowKind::Inequality);
+}
+
+template <class T>
+void JointSpeedLimitKernel::compute(const T* z, T* rows) const {
+  for (size_t i = 0; i < dofs_.size(); ++i) {
+    const double limit = model_->bodies[model_->dofBody[dofs_[i]]].speedLimit;
+    rows[2 * i] = z[dofs_[i]] - limit;
+    rows[2 * i + 1] = -z[dofs_[i]] - limit;
+  }
+}
+SPACETIME_DEFINE_EVALUATORS(JointSpeedLimitKernel)
+
 // --- FormulaKernel -----------------------------------------------------------------------
 
 FormulaKernel::FormulaKernel(std::shared_ptr<const expr::Tape> tape, int inputs, double time,

@@ -108,6 +108,20 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
     val["worst_ground_penetration_time"] = v.worstGroundPenetrationTime;
     val["worst_ground_penetration_body"] = v.worstGroundPenetrationBody;
   }
+  if (v.hasPositionLimits) {
+    val["max_joint_limit_excess"] = v.maxJointLimitExcess;
+    if (!v.worstJointLimit.empty()) {
+      val["worst_joint_limit_time"] = v.worstJointLimitTime;
+      val["worst_joint_limit"] = v.worstJointLimit;
+    }
+  }
+  if (v.hasSpeedLimits) {
+    val["max_joint_speed_excess"] = v.maxJointSpeedExcess;
+    if (!v.worstJointSpeed.empty()) {
+      val["worst_joint_speed_time"] = v.worstJointSpeedTime;
+      val["worst_joint_speed"] = v.worstJointSpeed;
+    }
+  }
   val["max_forward_simulation_error"] = v.maxForwardSimulationError;
   json flights = json::array();
   for (const FlightCheck& f : v.flights)

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
 
 #include "core/scene_io.h"
 
@@ -46,6 +49,25 @@ TEST(SceneIo, FreeContactEndRoundTrips) {
       EXPECT_EQ(t.freeEndWindow, 0.05);
     }
   EXPECT_EQ(free, 1);
+}
+
+// A joint axis of huge components normalises to its direction (its squared norm overflows a
+// double: it used to become [0, 0, 0], which solved to nothing and saved a file that would not
+// load again).
+TEST(SceneIo, HugeJointAxisNormalisesToItsDirection) {
+  std::ifstream in(kScenes + "luxo_jump.json");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::regex firstJointAxis(R"("axis": \[\s*0,\s*0,\s*1\s*\])");
+  std::string text = buffer.str();
+  ASSERT_TRUE(std::regex_search(text, firstJointAxis));
+  text = std::regex_replace(text, firstJointAxis, R"("axis": [0, 3e200, 4e200])", std::regex_constants::format_first_only);
+  const SceneLoadResult huge = parseScene(text, "huge.json");
+  ASSERT_TRUE(huge.scene) << huge.error;
+  const Eigen::Vector3d a = huge.scene->characters[0].bodies[1].joint.axis;
+  EXPECT_NEAR((a - Eigen::Vector3d(0, 0.6, 0.8)).norm(), 0, 1e-15);
+  const SceneLoadResult again = parseScene(sceneToJson(*huge.scene), "again.json");
+  EXPECT_TRUE(again.scene) << again.error;
 }
 
 TEST(SceneIo, AtomicSaveThenLoad) {

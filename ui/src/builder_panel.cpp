@@ -235,6 +235,13 @@ void BuilderPanel::bodyForm(int c, const std::string& id) {
                          else b.joint.torqueLimit.reset();
                        });
                      }, 0, 1e5, 1, 2, tr(" (0: none)"));
+    form_->addDouble(tr("Speed limit"), [body](const Scene& s) { return body(s).joint.speedLimit.value_or(0.0); },
+                     [edit](Scene& s, double v) {
+                       edit(s, [v](BodySpec& b) {
+                         if (v > 0) b.joint.speedLimit = v;
+                         else b.joint.speedLimit.reset();
+                       });
+                     }, 0, 1e4, 1, 2, tr(" (0: none)"));
   }
   form_->addChoice(tr("Geometry"), {tr("None"), tr("Box"), tr("Sphere"), tr("Capsule"), tr("Cylinder")},
                    [body](const Scene& s) { return static_cast<int>(body(s).geometry.kind); },

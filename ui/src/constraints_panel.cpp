@@ -105,13 +105,14 @@ void ConstraintsPanel::rebuildList() {
     item->setData(0, Qt::UserRole + 1, QString::fromStdString(toString(t.kind)));
     if (t.id == doc_->selectedTerm()) list_->setCurrentItem(item);
   }
-  // Joint and torque limits live on the joints (edited in the builder); listed here too.
+  // Joint position, torque and speed limits live on the joints (edited in the builder); listed here too.
   for (size_t c = 0; c < s.characters.size(); ++c)
     for (const BodySpec& b : s.characters[c].bodies) {
-      if (b.parent.empty() || (!b.joint.limits && !b.joint.torqueLimit)) continue;
+      if (b.parent.empty() || (!b.joint.limits && !b.joint.torqueLimit && !b.joint.speedLimit)) continue;
       QString range;
       if (b.joint.limits) range = QString("[%1, %2]").arg(b.joint.limits->first).arg(b.joint.limits->second);
       if (b.joint.torqueLimit) range += QString(" |τ|≤%1").arg(*b.joint.torqueLimit);
+      if (b.joint.speedLimit) range += QString(" |q̇|≤%1").arg(*b.joint.speedLimit);
       auto* item = new QTreeWidgetItem(list_, {QString::fromStdString(b.joint.id), tr("limit"), range});
       item->setData(0, Qt::UserRole, QString::fromStdString(b.id));
       item->setData(0, Qt::UserRole + 1, QString("limit"));

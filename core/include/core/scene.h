@@ -4,7 +4,7 @@
 // A scene holds characters (a tree of bodies with joints, geometry and mass), the time range,
 // gravity, the ground plane (y = height, y is up), the transcription settings, the constraint
 // terms (pins, keyframes, rests, contacts, clearances) and the weighted objective terms.
-// Joint and torque limits live on the joints. Ids are stable strings.
+// Joint position, speed and torque limits live on the joints. Ids are stable strings.
 #pragma once
 
 #include <Eigen/Core>
@@ -46,6 +46,7 @@ struct JointSpec {
   bool actuated = true;
   std::optional<std::pair<double, double>> limits;  // [lower, upper]
   std::optional<double> torqueLimit;                // |tau| <= limit
+  std::optional<double> speedLimit;                 // |qd| <= limit (rad/s or m/s)
 };
 
 struct BodySpec {

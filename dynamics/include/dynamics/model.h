@@ -82,6 +82,8 @@ struct Body {
   S lower = S(0), upper = S(0);
   bool hasEffortLimit = false;
   S effortLimit = S(0);
+  bool hasSpeedLimit = false;  // |qd| <= speedLimit
+  S speedLimit = S(0);
 
   template <class U>
   Body<U> cast() const {
@@ -100,6 +102,8 @@ struct Body {
     b.upper = U(upper);
     b.hasEffortLimit = hasEffortLimit;
     b.effortLimit = U(effortLimit);
+    b.hasSpeedLimit = hasSpeedLimit;
+    b.speedLimit = U(speedLimit);
     return b;
   }
 };

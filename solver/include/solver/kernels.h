@@ -282,6 +282,19 @@ class JointLimitKernel : public Kernel {
   std::vector<int> dofs_;
 };
 
+// Joint speed limits: qd - limit <= 0 and -qd - limit <= 0 for every dof whose joint has a
+// speed limit (Body::hasSpeedLimit). z = qd.
+class JointSpeedLimitKernel : public Kernel {
+ public:
+  JointSpeedLimitKernel(std::shared_ptr<const Model<double>> model, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 0; }  // linear rows
+
+ private:
+  std::shared_ptr<const Model<double>> model_;
+  std::vector<int> dofs_;
+};
+
 // A user formula compiled to a tape, at one time: scale * (f(z, t) - offset). Its inputs are
 // the dynamics kernel's (q, qd, qdd, then the active contacts' forces).
 class FormulaKernel : public Kernel {

@@ -277,6 +277,7 @@ class SpacetimeProblem {
   void addResidualAt(std::shared_ptr<const Kernel> kernel, int event, const Fill& fill);
   // Every body's geometry above the ground outside its contacts (SolverSpec::bodiesAboveGround).
   void addGroundClearances();
+  void addJointSpeedLimits();
   // The time reference of t for character c (see TimeRef): moving inside a free end's window.
   // The root interval is the one `side` picks at a breakpoint (Side::After: a flight's first
   // instant reads the interval that starts there).

@@ -24,6 +24,9 @@ namespace spacetime {
 // Two instants closer than this are the same (contact edges, samples, breakpoints).
 inline constexpr double kTimeTolerance = 1e-9;
 
+// How many times denser than the samples the validity report's grid is (Transcription::denseGrid).
+inline constexpr int kDenseGridFactor = 10;
+
 struct Sample {
   double time = 0;
   double weight = 0;  // quadrature weight (0 for the extra boundary samples)

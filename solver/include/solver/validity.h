@@ -73,6 +73,15 @@ struct ValidityReport {
   double maxGroundPenetration = 0;
   double worstGroundPenetrationTime = 0;
   std::string worstGroundPenetrationBody;
+  // How far any joint goes beyond its position limits (rad or m) and its speed limit (rad/s or
+  // m/s) on the dense grid; when and which joint. Reported when some joint has such a limit.
+  bool hasPositionLimits = false, hasSpeedLimits = false;
+  double maxJointLimitExcess = 0;
+  double worstJointLimitTime = 0;
+  std::string worstJointLimit;
+  double maxJointSpeedExcess = 0;
+  double worstJointSpeedTime = 0;
+  std::string worstJointSpeed;
   std::vector<FlightCheck> flights;
   std::vector<ImpactCheck> impacts;
   std::vector<FormulaCheck> formulas;
@@ -86,7 +95,7 @@ struct ValidityReport {
 
 // `cancel` (optional) stops the checks early: the report then has `cancelled` set and is
 // incomplete (the editor drops the report of a motion an edit has already replaced).
-ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = 10,
+ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = kDenseGridFactor,
                              const std::atomic<bool>* cancel = nullptr);
 
 // The largest unactuated generalized force of character c at sample s (fraction of weight), on
