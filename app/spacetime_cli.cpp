@@ -1,9 +1,11 @@
 // spacetime-cli: solve a scene headless and write its outputs.
 //
 //   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S]
-//                       [--quiet] [--no-polish]
+//                       [--quiet] [--no-polish] [--max-refinements N] [--init SOLVED.json]
 //
-// Writes DIR/summary.json, DIR/motion.json and DIR/<character>.urdf. Progress (iteration,
+// Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
+// solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
+// solution, else from the scene's own (an editor save), else from the default guess. Progress (iteration,
 // objective, violation) goes to stderr unless --quiet. Exit status: 0 converged and every
 // validity check passes; 1 the outputs could not be written; 2 bad input (a one-line reason,
 // before anything is written); 3 the solve did not converge; 4 it converged but the validity
@@ -14,6 +16,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 
 #include "core/scene_io.h"
@@ -28,13 +31,13 @@ namespace {
 
 #define SPACETIME_CLI_USAGE \
   "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet]\n" \
-  "                          [--no-polish] [--max-refinements N]\n"
+  "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n"
 
 constexpr const char* kHelp =
     SPACETIME_CLI_USAGE
     "\n"
     "Solves a Spacetime scene headless and writes DIR/summary.json, DIR/motion.json, one URDF and\n"
-    "one BVH per character and DIR/motion.glb.\n"
+    "one BVH per character, DIR/motion.glb and DIR/scene.json (the scene with the solver's state).\n"
     "  --rate HZ          frames per second of motion.json, BVH and glTF (default 1000)\n"
     "  --threads N        Ceres evaluation threads (default 2)\n"
     "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
@@ -42,6 +45,9 @@ constexpr const char* kHelp =
     "  --no-polish        the augmented Lagrangian without the Newton polish\n"
     "  --max-refinements N  finer transcriptions tried when the motion fails the validity report\n"
     "                     or the solve stalls (default 3; 0: only the scene's transcription)\n"
+    "  --init SOLVED.json start from the solution stored in a scene: DIR/scene.json of an earlier\n"
+    "                     solve (resumes it exactly when the scene is the same) or an editor save.\n"
+    "                     Without it a scene's own stored solution is the start.\n"
     "Exit status: 0 converged and valid; 1 outputs not written; 2 bad input or options (nothing\n"
     "written); 3 not converged or out of time (outputs written); 4 converged but the validity\n"
     "report fails (outputs written).\n";
@@ -69,6 +75,7 @@ int main(int argc, char** argv) {
   bool quiet = false;
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
   RefinementOptions refinement;
+  std::string initPath;  // --init: a scene holding a stored solution
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) outDir = argv[++i];
@@ -93,6 +100,7 @@ int main(int argc, char** argv) {
       if (!end || *end || n < 0 || n > 10) return usage("--max-refinements must be a whole number in [0, 10]");
       refinement.maxRefinements = static_cast<int>(n);
     }
+    else if (a == "--init" && i + 1 < argc) initPath = argv[++i];
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (scenePath.empty()) scenePath = a;
     else return usage(("unexpected argument " + a).c_str());
@@ -111,10 +119,37 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "spacetime-cli: %s: %s\n", scenePath.c_str(), error.c_str());
     return 2;
   }
+  // The starting point: --init's stored solution, else the scene's own, else the default guess.
+  std::optional<Scene> start;
+  if (!initPath.empty()) {
+    const SceneLoadResult init = loadSceneFile(initPath);
+    if (!init.scene) {
+      std::fprintf(stderr, "spacetime-cli: --init: %s\n", init.error.c_str());
+      return 2;
+    }
+    if (!init.scene->solution) {
+      std::fprintf(stderr, "spacetime-cli: --init: %s holds no solution (expected DIR/scene.json of a solve, or a scene "
+                   "the editor saved after solving)\n", initPath.c_str());
+      return 2;
+    }
+    start = *init.scene;
+  } else if (loaded.scene->solution) {
+    start = *loaded.scene;
+  }
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = threads;
   options.maxSeconds = maxSeconds;
   options.newtonPolish = polish;
+  if (start) {
+    const StoredSolution& s = *start->solution;
+    const SpacetimeProblem::WarmStart how = problem->warmStartFrom(*start, {s.variables, s.multipliers, s.rho});
+    options.warmStart = how != SpacetimeProblem::WarmStart::None;
+    if (!quiet)
+      std::fprintf(stderr, "starting from %s: %s\n", initPath.empty() ? "the scene's stored solution" : initPath.c_str(),
+                   how == SpacetimeProblem::WarmStart::Exact      ? "its solver state, exactly"
+                   : how == SpacetimeProblem::WarmStart::Refitted ? "its motion, re-fitted to this transcription"
+                                                                  : "nothing in common with this scene; the default guess");
+  }
   ProgressCallback progress = nullptr;
   if (!quiet)
     progress = [](const IterationReport& r) {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/scene_io.h"
 #include "dynamics/urdf_export.h"
 #include "solver/bvh_export.h"
 #include "solver/gltf_export.h"
@@ -254,6 +255,12 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
   for (const CharacterVariables& c : problem.characters()) models.push_back(c.model.get());
   files.emplace_back(dir + "/motion.json", motionJson(animation));
   files.emplace_back(dir + "/motion.glb", motionGlb(problem.scene(), models, animation));
+  // The scene solved (with the transcription of the motion written) and the solver's state, so
+  // that `spacetime-cli solve --init DIR/scene.json` resumes exactly where this solve stopped.
+  Scene solved = problem.scene();
+  const SolutionState state = problem.state();
+  solved.solution = StoredSolution{state.variables, state.multipliers, state.rho, summary.converged};
+  files.emplace_back(dir + "/scene.json", sceneToJson(solved));
   files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem, attempts));
   for (const auto& [path, text] : files)
     if (!writeFileAtomically(path, text, error)) return false;

@@ -1172,6 +1172,14 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
   return matched;
 }
 
+SpacetimeProblem::WarmStart SpacetimeProblem::warmStartFrom(const Scene& source, const SolutionState& state) {
+  if (restore(state)) return WarmStart::Exact;
+  std::string ignored;
+  const std::unique_ptr<SpacetimeProblem> previous = build(source, &ignored);
+  if (previous && previous->restore(state) && initializeFrom(*previous) > 0) return WarmStart::Refitted;
+  return WarmStart::None;
+}
+
 bool SpacetimeProblem::restore(const SolutionState& s) {
   if (s.variables.size() != x_.size() || s.multipliers.size() != al_.lambda.size()) return false;
   std::copy(s.variables.begin(), s.variables.end(), x_.begin());  // parameter blocks point into x_

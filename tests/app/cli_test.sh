@@ -10,7 +10,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 
 "$cli" solve "$scenes/particle.json" --out "$tmp/good" --quiet 2>"$tmp/good.err" || fail "good scene exited $?"
-for f in summary.json motion.json motion.glb particle.urdf particle.bvh; do [ -s "$tmp/good/$f" ] || fail "missing $f"; done
+for f in summary.json motion.json motion.glb scene.json particle.urdf particle.bvh; do [ -s "$tmp/good/$f" ] || fail "missing $f"; done
 for key in '"formatVersion"' '"dofs"' '"actuated"' '"times"' '"q"' '"qd"' '"qdd"' '"tau"' '"contacts"' '"urdf"'; do
   grep -q "$key" "$tmp/good/motion.json" || fail "motion.json lacks $key"
 done
@@ -68,4 +68,27 @@ assert len(r) >= 2 and r[0]["samples_per_segment"] == 1 and not r[0]["valid"], r
 assert r[-1]["valid"] and r[-1]["kept"] and s["validity"]["valid"], r
 assert s["transcription"]["samples_per_segment"] == r[-1]["samples_per_segment"] > 1, s["transcription"]
 PY
+# Resume: the time-limited jump above wrote its last iterate with the solver's state in
+# scene.json; --init resumes it to the cold solve's optimum, and solving that converged scene.json
+# again (its own stored solution) takes no Levenberg-Marquardt iteration. A file without a stored
+# solution is bad input for --init.
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/cold" --quiet 2>/dev/null || fail "the cold jump exited $?"
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/resumed" --init "$tmp/limited/scene.json" 2>"$tmp/resumed.err" ||
+  fail "the resumed jump exited $?: $(tail -3 "$tmp/resumed.err")"
+grep -q "starting from $tmp/limited/scene.json: its solver state, exactly" "$tmp/resumed.err" ||
+  fail "the resume does not say where it starts: $(head -1 "$tmp/resumed.err")"
+"$cli" solve "$tmp/resumed/scene.json" --out "$tmp/again" --quiet 2>/dev/null || fail "re-solving a converged scene.json exited $?"
+python3 - "$tmp/cold/summary.json" "$tmp/resumed/summary.json" "$tmp/again/summary.json" <<'PY' || fail "the resumed solve is wrong"
+import json, sys
+cold, resumed, again = (json.load(open(p)) for p in sys.argv[1:])
+assert abs(resumed["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (resumed["objective"], cold["objective"])
+assert abs(again["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (again["objective"], cold["objective"])
+assert again["iterations"] == 0, again["iterations"]
+PY
+"$cli" solve "$scenes/particle.json" --out "$tmp/no_init" --init "$scenes/particle.json" 2>"$tmp/no_init.err"
+status=$?
+[ "$status" -eq 2 ] || fail "--init without a stored solution exited $status, expected 2"
+grep -q "holds no solution" "$tmp/no_init.err" || fail "unclear --init error: $(cat "$tmp/no_init.err")"
+[ ! -e "$tmp/no_init" ] || fail "a bad --init created the output directory"
+
 echo "1 passed, 0 failed"

@@ -104,13 +104,8 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
     } else {
       SolverOptions options = solverOptionsFor(scene.solver);
       options.threads = threadCount;
-      options.warmStart = warmStart && problem->restore(*warmStart);
-      if (warmStart && !options.warmStart && warmScene) {
-        std::string ignored;
-        std::unique_ptr<SpacetimeProblem> previous = SpacetimeProblem::build(*warmScene, &ignored);
-        if (previous && previous->restore(*warmStart))
-          options.warmStart = problem->initializeFrom(*previous) > 0;
-      }
+      options.warmStart = warmStart && (warmScene ? problem->warmStartFrom(*warmScene, *warmStart) != SpacetimeProblem::WarmStart::None
+                                                  : problem->restore(*warmStart));
       // The starting motion, drawn at once - except for a warm start, where it is the motion
       // already on screen, and redrawing it (a whole window under Xvfb) only delays the re-solve.
       if (!options.warmStart) {

@@ -1,6 +1,7 @@
 // The command-line outputs of a solve: summary.json (solver summary + validity report),
 // motion.json (the Animation in the contract outside tools read), motion.glb (the animated scene
-// as glTF), one URDF and one BVH per character.
+// as glTF), one URDF and one BVH per character, and scene.json (the scene with the solver's state,
+// to resume from).
 // Every file is written atomically; the directory is created if needed.
 #pragma once
 
@@ -22,8 +23,8 @@ std::string motionJson(const Animation& animation);
 // must share the time grid (sampleAnimation guarantees it).
 std::string motionCsv(const Animation& animation);
 
-// Writes summary.json, motion.json, motion.glb, <character>.urdf and <character>.bvh (the motion
-// at the same rate) into dir. False with a reason on error.
+// Writes summary.json, motion.json, motion.glb, scene.json, <character>.urdf and <character>.bvh
+// (the motion at the same rate) into dir. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, double rateHz, const std::string& dir,
                        std::string* error, std::string* warning,

@@ -262,6 +262,13 @@ class SpacetimeProblem {
   // penalty at the previous one's. Returns the number of characters matched.
   int initializeFrom(const SpacetimeProblem& previous);
 
+  // Starts from `state`, a solution of the problem of `source`: exactly (restore) when this
+  // problem has that layout - a resumed solve, an edit that moved a pin - and otherwise re-fitted
+  // to this transcription (initializeFrom; multipliers start at zero). False when neither
+  // applies (no character in common); this problem then keeps its default guess.
+  enum class WarmStart { None, Exact, Refitted };
+  WarmStart warmStartFrom(const Scene& source, const SolutionState& state);
+
   SolutionState state() const { return {x_, al_.lambda, al_.rho}; }
   // Restores a state of the same problem shape; false if the shapes differ.
   bool restore(const SolutionState& s);
