@@ -14,6 +14,8 @@
 // Before exiting 3 or 4 the solve refines the transcription (solver/refinement.h) up to
 // --max-refinements times and writes the best motion it found.
 #include <algorithm>
+#include <chrono>
+#include <new>
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
@@ -59,7 +61,21 @@ int usage(const char* why) {
 
 }  // namespace
 
+int run(int argc, char** argv);
+
 int main(int argc, char** argv) {
+  // Out of memory anywhere (a scene within SceneLimits on a small machine) is reported, and
+  // nothing is written: the outputs are built in memory before any file is.
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "spacetime-cli: out of memory; nothing written\n");
+    return 3;
+  }
+}
+
+int run(int argc, char** argv) {
+  const auto started = std::chrono::steady_clock::now();  // --max-seconds bounds the whole run
   for (int i = 1; i < argc; ++i)
     if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
       std::fputs(kHelp, stdout);
@@ -136,9 +152,14 @@ int main(int argc, char** argv) {
   } else if (loaded.scene->solution) {
     start = *loaded.scene;
   }
+  if (!checkOutputDirectory(outDir, &error)) {
+    std::fprintf(stderr, "spacetime-cli: %s\n", error.c_str());
+    return 2;
+  }
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = threads;
   options.maxSeconds = maxSeconds;
+  options.spentSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   options.newtonPolish = polish;
   if (start) {
     const StoredSolution& s = *start->solution;

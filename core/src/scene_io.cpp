@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -75,6 +76,14 @@ class Reader {
     if (!v.is_number()) badValue(path, v, "a number");
     const double d = v.get<double>();
     if (!std::isfinite(d)) badValue(path, v, "a finite number");
+    if (std::abs(d) > SceneLimits::kMaxMagnitude) badValue(path, v, "a number of magnitude at most 1e9");
+    return d;
+  }
+  // A solver variable or multiplier: any finite number (a stopped solve's may be large).
+  double finite(const json& v, const std::string& path) const {
+    if (!v.is_number()) badValue(path, v, "a number");
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) badValue(path, v, "a finite number");
     return d;
   }
   double positive(const json& v, const std::string& path) const {
@@ -105,6 +114,8 @@ class Reader {
     bool ok = !s.empty();
     for (char c : s) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-');
     if (!ok) badValue(path, v, "a non-empty id of letters, digits, '_' or '-'");
+    // Ids name output files (<character>.urdf): a 300-character one solved, then failed to write.
+    if (s.size() > SceneLimits::kMaxIdLength) badValue(path, v, "an id of at most 64 characters");
     return s;
   }
   Eigen::Vector3d vec3(const json& v, const std::string& path) const {
@@ -247,6 +258,28 @@ BodySpec readBody(const Reader& r, const json& b, const std::string& path, bool 
   return bs;
 }
 
+// The transcription's size (SceneLimits): checked before anything grows with it.
+void checkSize(const Reader& r, const Scene& s) {
+  const double segments = (s.endTime - s.startTime) * s.transcription.controlPointsPerSecond;
+  char what[200];
+  if (segments > SceneLimits::kMaxSegments) {
+    std::snprintf(what, sizeof what,
+                  "%.3g spline segments ((time.end - time.start) x controlPointsPerSecond); at most %.0f",
+                  segments, SceneLimits::kMaxSegments);
+    r.fail("transcription.controlPointsPerSecond", what);
+  }
+  double work = 0;
+  for (const CharacterSpec& c : s.characters)
+    work += std::pow(static_cast<double>(c.bodies.size() + 6), 2) * std::max(1.0, segments) * s.transcription.samplesPerSegment;
+  if (work > SceneLimits::kMaxWork) {
+    std::snprintf(what, sizeof what,
+                  "a problem of size %.3g ((bodies + 6)^2 x segments x samplesPerSegment, summed over the "
+                  "characters); at most %.3g",
+                  work, SceneLimits::kMaxWork);
+    r.fail("transcription", what);
+  }
+}
+
 CharacterSpec readCharacter(const Reader& r, const json& c, const std::string& path) {
   r.allowKeys(c, path, {"id", "root", "rootActuated", "bodies"});
   CharacterSpec cs;
@@ -261,6 +294,8 @@ CharacterSpec readCharacter(const Reader& r, const json& c, const std::string& p
   const std::string bp = Reader::join(path, "bodies");
   const json& bodies = r.required(c, path, "bodies");
   if (!bodies.is_array() || bodies.empty()) r.badValue(bp, bodies, "a non-empty array of bodies");
+  if (bodies.size() > SceneLimits::kMaxBodies)
+    r.fail(bp, std::to_string(bodies.size()) + " bodies; a character has at most " + std::to_string(SceneLimits::kMaxBodies));
   std::set<std::string> seen, dofs;
   for (size_t i = 0; i < bodies.size(); ++i) {
     BodySpec b = readBody(r, bodies[i], Reader::index(bp, i), i == 0);
@@ -504,6 +539,9 @@ Scene readScene(const Reader& r, const json& root) {
   }
   const json& chars = r.required(root, "", "characters");
   if (!chars.is_array() || chars.empty()) r.badValue("characters", chars, "a non-empty array");
+  if (chars.size() > SceneLimits::kMaxCharacters)
+    r.fail("characters", std::to_string(chars.size()) + " characters; a scene has at most " +
+                             std::to_string(SceneLimits::kMaxCharacters));
   for (size_t i = 0; i < chars.size(); ++i) {
     CharacterSpec c = readCharacter(r, chars[i], Reader::index("characters", i));
     if (s.character(c.id))
@@ -513,6 +551,8 @@ Scene readScene(const Reader& r, const json& root) {
   if (root.contains("terms")) {
     const json& terms = root["terms"];
     if (!terms.is_array()) r.badValue("terms", terms, "an array");
+    if (terms.size() > SceneLimits::kMaxTerms)
+      r.fail("terms", std::to_string(terms.size()) + " terms; a scene has at most " + std::to_string(SceneLimits::kMaxTerms));
     std::set<std::string> ids;
     for (size_t i = 0; i < terms.size(); ++i) {
       TermSpec t = readTerm(r, terms[i], Reader::index("terms", i), s);
@@ -561,14 +601,15 @@ Scene readScene(const Reader& r, const json& root) {
       const json& a = r.required(j, "solution", key);
       if (!a.is_array()) r.badValue(path, a, "an array of numbers");
       out.reserve(a.size());
-      for (size_t i = 0; i < a.size(); ++i) out.push_back(r.number(a[i], Reader::index(path, i)));
+      for (size_t i = 0; i < a.size(); ++i) out.push_back(r.finite(a[i], Reader::index(path, i)));
     };
     numbers("variables", sol.variables);
     numbers("multipliers", sol.multipliers);
-    if (j.contains("rho")) sol.rho = r.nonNegative(j["rho"], "solution.rho");
+    if (j.contains("rho")) sol.rho = std::max(0.0, r.finite(j["rho"], "solution.rho"));
     if (j.contains("converged")) sol.converged = r.boolean(j["converged"], "solution.converged");
     s.solution = std::move(sol);
   }
+  checkSize(r, s);
   return s;
 }
 

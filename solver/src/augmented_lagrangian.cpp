@@ -217,7 +217,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   co.max_num_line_search_step_size_iterations = 0;
   // The solve's wall-clock limit, for the Ceres iterations and the Newton polish alike.
   const Clock::time_point deadline =
-      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::min(options.maxSeconds, 1e9)));
+      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::clamp(options.maxSeconds - options.spentSeconds, 0.0, 1e9)));
   ProgressForwarder forwarder(problem, callback, cancel, start, deadline);
   co.callbacks.push_back(&forwarder);
 

@@ -1,7 +1,12 @@
 // JSON writers for the command-line outputs (see outputs.h).
 #include "solver/outputs.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -230,16 +235,70 @@ std::string motionJson(const Animation& animation) {
   return j.dump() + "\n";
 }
 
+namespace {
+
+// What a solve writes into its output directory.
+bool isSolveOutput(const std::string& name) {
+  auto endsWith = [&](const char* suffix) {
+    const std::string x(suffix);
+    return name.size() > x.size() && name.compare(name.size() - x.size(), x.size(), x) == 0;
+  };
+  return name == "summary.json" || name == "motion.json" || name == "motion.glb" || name == "scene.json" ||
+         endsWith(".urdf") || endsWith(".bvh");
+}
+
+// The directory as an absolute path without a trailing separator.
+std::filesystem::path outputPath(const std::string& dir) {
+  std::filesystem::path p = std::filesystem::absolute(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p;
+}
+
+bool fsyncPath(const std::filesystem::path& p) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return false;
+  const bool ok = ::fsync(fd) == 0;
+  ::close(fd);
+  return ok;
+}
+
+}  // namespace
+
+bool checkOutputDirectory(const std::string& dir, std::string* error) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path target = outputPath(dir);
+  if (fs::exists(target, ec)) {
+    if (!fs::is_directory(target, ec)) {
+      *error = "--out " + dir + " is a file, not a directory";
+      return false;
+    }
+    for (fs::directory_iterator it(target, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (!isSolveOutput(name)) {
+        *error = "--out " + dir + " holds '" + name.substr(0, 100) +
+                 "', which a solve does not write; the outputs replace the directory as a whole, so give a new "
+                 "or empty directory or one an earlier solve wrote";
+        return false;
+      }
+    }
+  }
+  // The new set is written beside the directory, then swapped in: its parent must be writable.
+  fs::path parent = target.parent_path();
+  while (!parent.empty() && !fs::exists(parent, ec) && parent != parent.parent_path()) parent = parent.parent_path();
+  if (!fs::is_directory(parent, ec) || ::access(parent.c_str(), W_OK) != 0) {
+    *error = "cannot write the outputs: " + parent.string() + " is not a writable directory";
+    return false;
+  }
+  return true;
+}
+
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, double rateHz, const std::string& dir,
                        std::string* error, std::string* warning,
                        const std::vector<TranscriptionAttempt>& attempts) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) {
-    *error = "cannot create output directory " + dir + ": " + ec.message();
-    return false;
-  }
+  namespace fs = std::filesystem;
+  if (!checkOutputDirectory(dir, error)) return false;
   // Build every file's contents first, then write them; a failure names the file.
   std::vector<std::pair<std::string, std::string>> files;
   const Animation animation = sampleAnimation(problem, rateHz);
@@ -248,22 +307,65 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
     const CharacterSpec& spec = problem.scene().characters[c];
     const UrdfExport urdf = exportUrdf(model, spec);
     if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
-    files.emplace_back(dir + "/" + model.name + ".urdf", urdf.xml);
-    files.emplace_back(dir + "/" + model.name + ".bvh", motionBvh(model, spec, animation.characters[c]));
+    files.emplace_back(model.name + ".urdf", urdf.xml);
+    files.emplace_back(model.name + ".bvh", motionBvh(model, spec, animation.characters[c]));
   }
   std::vector<const Model<double>*> models;
   for (const CharacterVariables& c : problem.characters()) models.push_back(c.model.get());
-  files.emplace_back(dir + "/motion.json", motionJson(animation));
-  files.emplace_back(dir + "/motion.glb", motionGlb(problem.scene(), models, animation));
+  files.emplace_back("motion.json", motionJson(animation));
+  files.emplace_back("motion.glb", motionGlb(problem.scene(), models, animation));
   // The scene solved (with the transcription of the motion written) and the solver's state, so
   // that `spacetime-cli solve --init DIR/scene.json` resumes exactly where this solve stopped.
   Scene solved = problem.scene();
   const SolutionState state = problem.state();
   solved.solution = StoredSolution{state.variables, state.multipliers, state.rho, summary.converged};
-  files.emplace_back(dir + "/scene.json", sceneToJson(solved));
-  files.emplace_back(dir + "/summary.json", summaryJson(summary, validity, problem, attempts));
-  for (const auto& [path, text] : files)
-    if (!writeFileAtomically(path, text, error)) return false;
+  files.emplace_back("scene.json", sceneToJson(solved));
+  files.emplace_back("summary.json", summaryJson(summary, validity, problem, attempts));
+
+  // All or nothing: the new set goes into a fresh directory beside DIR (.DIR.new-PID), every file
+  // and the directory flushed to disk, then takes DIR's place in one atomic exchange
+  // (renameat2 RENAME_EXCHANGE); the old set, now in the temporary, is removed. A killed run
+  // leaves DIR complete, old or new; its temporary is removed by the next run.
+  const fs::path target = outputPath(dir);
+  const fs::path parent = target.parent_path();
+  const std::string name = target.filename().string();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) {
+    *error = "cannot create output directory " + parent.string() + ": " + ec.message();
+    return false;
+  }
+  removeStaleTemporaries(parent.string(), "." + name + ".new-");
+  removeStaleTemporaries(parent.string(), "." + name + ".old-");
+  const fs::path fresh = parent / ("." + name + ".new-" + std::to_string(::getpid()));
+  fs::remove_all(fresh, ec);
+  fs::create_directory(fresh, ec);
+  if (ec) {
+    *error = "cannot create " + fresh.string() + ": " + ec.message();
+    return false;
+  }
+  auto abandon = [&](const std::string& why) {
+    *error = why;
+    std::error_code ignored;
+    fs::remove_all(fresh, ignored);
+    return false;
+  };
+  for (const auto& [file, text] : files)
+    if (!writeFileAtomically((fresh / file).string(), text, error)) return abandon(*error);
+  if (!fsyncPath(fresh)) return abandon("cannot flush " + fresh.string() + ": " + std::strerror(errno));
+  if (!fs::exists(target, ec)) {
+    if (::rename(fresh.c_str(), target.c_str()) != 0)
+      return abandon("cannot create " + target.string() + ": " + std::strerror(errno));
+  } else if (::renameat2(AT_FDCWD, fresh.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) != 0) {
+    // A file system without the exchange: move the old set aside, then the new one in. A kill
+    // between the two renames leaves DIR missing and both sets beside it.
+    const fs::path old = parent / ("." + name + ".old-" + std::to_string(::getpid()));
+    if (::rename(target.c_str(), old.c_str()) != 0 || ::rename(fresh.c_str(), target.c_str()) != 0)
+      return abandon("cannot replace " + target.string() + ": " + std::strerror(errno));
+    fs::remove_all(old, ec);
+  }
+  fs::remove_all(fresh, ec);  // the old set, after the exchange
+  fsyncPath(parent);
   return true;
 }
 

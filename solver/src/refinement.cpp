@@ -65,7 +65,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
                           const RefinementOptions& refinement, const ProgressCallback& callback,
                           const std::atomic<bool>* cancel) {
   const Clock::time_point start = Clock::now();
-  const double budget = options.maxSeconds;
+  const double spentBefore = options.spentSeconds;
   RefinedSolve best;
   int bestAttempt = -1;
   SolverSummary total;  // iterations and times of every solve
@@ -109,7 +109,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     TranscriptionSpec finer;
     if (!refinement.enabled || level >= refinement.maxRefinements || !refinable(attempt.status, attempt.valid) ||
-        (cancel && cancel->load()) || elapsed >= budget || !refineTranscription(spec, refinement, &finer))
+        (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds || !refineTranscription(spec, refinement, &finer))
       break;
     // The next transcription starts from the best motion so far.
     Scene scene = best.problem->scene();
@@ -125,7 +125,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // the first two (4.1 / 12.6 s) and left the 1.5 m rung stalled at 45 control points per second.
     const bool transferred = problem->initializeFrom(*best.problem) > 0;
     options.warmStart = transferred && best.summary.converged;
-    options.maxSeconds = std::max(1e-3, budget - elapsed);
+    options.spentSeconds = spentBefore + elapsed;
     why = failure;
   }
   best.attempts[bestAttempt].kept = true;

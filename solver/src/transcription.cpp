@@ -8,7 +8,9 @@
 namespace spacetime {
 
 int segmentsFor(double t0, double t1, double rate) {
-  return std::max(1, static_cast<int>(std::lround((t1 - t0) * rate)));
+  // Clamped before rounding: lround of 1e300 overflowed to a single segment. The loader bounds
+  // the count far below this (SceneLimits::kMaxSegments).
+  return std::max(1, static_cast<int>(std::lround(std::clamp((t1 - t0) * rate, 0.0, 1e8))));
 }
 
 namespace {

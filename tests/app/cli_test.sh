@@ -30,6 +30,67 @@ grep -q "bad.json: field 'characters\[0\].bodies\[0\].mass': value -1" "$tmp/bad
 "$cli" --help > "$tmp/help.txt" || fail "--help exited $?"
 grep -q "Exit status" "$tmp/help.txt" || fail "--help does not explain the exit statuses"
 
+# Hostile sizes and magnitudes are bad input, refused at once with the field named, before
+# anything grows with them: a transcription of a million control points per second (it ran for
+# minutes inside the transcription), a clip of 1e6 s (2.4 GB, then an abort), 1e300 control points
+# per second (rounded to one segment, exit 0), a 1e300 kg mass, 1000 bodies (out of memory in
+# Ceres), a 300-character id (solved, then "File name too long"), and an --out that is a file or
+# not writable (found after the whole solve).
+hostile() {  # NAME SED-EXPRESSION SCENE EXPECTED-TEXT
+  sed "$2" "$scenes/$3" > "$tmp/$1.json"
+  ! cmp -s "$tmp/$1.json" "$scenes/$3" || fail "could not make the $1 scene"
+  start=$(date +%s%N)
+  "$cli" solve "$tmp/$1.json" --out "$tmp/$1" --quiet 2>"$tmp/$1.err"
+  status=$?
+  elapsed=$((($(date +%s%N) - start) / 1000000))
+  [ "$status" -eq 2 ] || fail "$1 exited $status, expected 2: $(cat "$tmp/$1.err")"
+  grep -q "$4" "$tmp/$1.err" || fail "$1: unclear error: $(cat "$tmp/$1.err")"
+  [ "$(wc -l < "$tmp/$1.err")" -eq 1 ] || fail "$1: expected one line: $(cat "$tmp/$1.err")"
+  [ "$elapsed" -lt 2000 ] || fail "$1 took $elapsed ms to refuse"
+  [ ! -e "$tmp/$1" ] || fail "$1 created the output directory"
+}
+hostile rate 's/"controlPointsPerSecond": 20/"controlPointsPerSecond": 1000000/' luxo_jump.json "field 'transcription.controlPointsPerSecond': 1.2e+06 spline segments"
+hostile huge_rate 's/"controlPointsPerSecond": 20/"controlPointsPerSecond": 1e300/' luxo_jump.json "controlPointsPerSecond': value 1e+300 is not allowed; expected a number of magnitude at most 1e9"
+hostile long_clip 's/"end": 1.0/"end": 1000000/' particle.json "spline segments"
+hostile heavy 's/"mass": 1.0/"mass": 1e300/' particle.json "mass': value 1e+300 is not allowed"
+long_id=$(printf 'x%.0s' $(seq 1 300))
+hostile long_id "s/\"id\": \"particle\"/\"id\": \"$long_id\"/" particle.json "an id of at most 64 characters"
+python3 - "$scenes/particle.json" "$tmp/crowd.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+bodies = s["characters"][0]["bodies"]
+for i in range(1000):
+    bodies.append({"id": "b%d" % i, "parent": bodies[-1]["id"], "mass": 1.0,
+                   "joint": {"id": "j%d" % i, "type": "revolute", "axis": [0, 0, 1]}})
+json.dump(s, open(sys.argv[2], "w"))
+PY
+"$cli" solve "$tmp/crowd.json" --out "$tmp/crowd" --quiet 2>"$tmp/crowd.err"
+[ $? -eq 2 ] || fail "1000 bodies: expected exit 2: $(cat "$tmp/crowd.err")"
+grep -q "1001 bodies; a character has at most 100" "$tmp/crowd.err" || fail "1000 bodies: unclear error: $(cat "$tmp/crowd.err")"
+python3 - "$scenes/particle.json" "$tmp/chain.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+bodies = s["characters"][0]["bodies"]
+for i in range(99):
+    bodies.append({"id": "b%d" % i, "parent": bodies[-1]["id"], "mass": 1.0,
+                   "joint": {"id": "j%d" % i, "type": "revolute", "axis": [0, 0, 1], "origin": [0.1, 0, 0]}})
+s["time"]["end"] = 10
+s["transcription"] = {"controlPointsPerSecond": 80, "samplesPerSegment": 8}
+json.dump(s, open(sys.argv[2], "w"))
+PY
+"$cli" solve "$tmp/chain.json" --out "$tmp/chain" --quiet 2>"$tmp/chain.err"
+[ $? -eq 2 ] || fail "a 100-body chain over 800 segments: expected exit 2: $(cat "$tmp/chain.err")"
+grep -q "field 'transcription': a problem of size 7.19e+07" "$tmp/chain.err" || fail "the chain: unclear error: $(cat "$tmp/chain.err")"
+touch "$tmp/a_file"
+"$cli" solve "$scenes/particle.json" --out "$tmp/a_file" 2>"$tmp/file_out.err"
+[ $? -eq 2 ] || fail "--out a file: expected exit 2"
+grep -q "is a file, not a directory" "$tmp/file_out.err" || fail "--out a file: unclear error: $(cat "$tmp/file_out.err")"
+mkdir -p "$tmp/foreign" && touch "$tmp/foreign/notes.txt"
+"$cli" solve "$scenes/particle.json" --out "$tmp/foreign" 2>"$tmp/foreign.err"
+[ $? -eq 2 ] || fail "--out with foreign files: expected exit 2"
+grep -q "holds 'notes.txt', which a solve does not write" "$tmp/foreign.err" || fail "--out with foreign files: $(cat "$tmp/foreign.err")"
+[ -e "$tmp/foreign/notes.txt" ] || fail "the user's file was touched"
+
 # --threads and --max-seconds: a one-thread solve works; a budget too short for the Luxo jump stops
 # it with exit 3, the outputs written and the reason naming the limit; nonsense is bad input.
 "$cli" solve "$scenes/particle.json" --out "$tmp/one" --threads 1 --quiet 2>/dev/null || fail "--threads 1 exited $?"

@@ -51,22 +51,28 @@ TEST(SceneIo, FreeContactEndRoundTrips) {
   EXPECT_EQ(free, 1);
 }
 
-// A joint axis of huge components normalises to its direction (its squared norm overflows a
-// double: it used to become [0, 0, 0], which solved to nothing and saved a file that would not
-// load again).
-TEST(SceneIo, HugeJointAxisNormalisesToItsDirection) {
+// A joint axis beyond the loader's magnitude bound is refused, naming the component (its
+// squared norm overflowed a double and it became [0, 0, 0]: the solve failed and the saved file
+// would not load again); a large one within the bound normalises to its direction.
+TEST(SceneIo, HugeJointAxisIsRefusedOrNormalised) {
   std::ifstream in(kScenes + "luxo_jump.json");
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::regex firstJointAxis(R"("axis": \[\s*0,\s*0,\s*1\s*\])");
-  std::string text = buffer.str();
+  const std::string text = buffer.str();
   ASSERT_TRUE(std::regex_search(text, firstJointAxis));
-  text = std::regex_replace(text, firstJointAxis, R"("axis": [0, 3e200, 4e200])", std::regex_constants::format_first_only);
-  const SceneLoadResult huge = parseScene(text, "huge.json");
-  ASSERT_TRUE(huge.scene) << huge.error;
-  const Eigen::Vector3d a = huge.scene->characters[0].bodies[1].joint.axis;
+  auto withAxis = [&](const char* axis) {
+    return parseScene(std::regex_replace(text, firstJointAxis, axis, std::regex_constants::format_first_only), "axis.json");
+  };
+  const SceneLoadResult huge = withAxis(R"("axis": [0, 3e200, 4e200])");
+  ASSERT_FALSE(huge.scene);
+  EXPECT_NE(huge.error.find("axis.json: field 'characters[0].bodies[1].joint.axis[1]'"), std::string::npos) << huge.error;
+  EXPECT_NE(huge.error.find("magnitude at most 1e9"), std::string::npos) << huge.error;
+  const SceneLoadResult large = withAxis(R"("axis": [0, 3e8, 4e8])");
+  ASSERT_TRUE(large.scene) << large.error;
+  const Eigen::Vector3d a = large.scene->characters[0].bodies[1].joint.axis;
   EXPECT_NEAR((a - Eigen::Vector3d(0, 0.6, 0.8)).norm(), 0, 1e-15);
-  const SceneLoadResult again = parseScene(sceneToJson(*huge.scene), "again.json");
+  const SceneLoadResult again = parseScene(sceneToJson(*large.scene), "again.json");
   EXPECT_TRUE(again.scene) << again.error;
 }
 

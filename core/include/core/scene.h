@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <map>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -124,6 +125,25 @@ struct ObjectiveSpec {
   int smoothnessOrder = 2;   // 2: acceleration, 3: jerk
   double contactForce = 1e-3;  // weight of the integral of sum |f / (m g)|^2: load sharing
   std::vector<FormulaObjective> formulas;
+};
+
+// Bounds the loader enforces, so that no file can make a solve allocate without bound, run for
+// hours before its time budget starts, or overflow a double: far beyond any animation scene
+// (a humanoid has 20-60 bodies; a 60 s clip at 40 control points per second is 2400 segments),
+// far below what the machine cannot hold (1000 bodies ran out of memory in Ceres; 1e6 control
+// points per second took minutes inside the transcription before --max-seconds started).
+struct SceneLimits {
+  static constexpr double kMaxMagnitude = 1e9;  // any number of the scene, in SI units
+  static constexpr std::size_t kMaxIdLength = 64;
+  static constexpr std::size_t kMaxCharacters = 16;
+  static constexpr std::size_t kMaxBodies = 100;  // per character
+  static constexpr std::size_t kMaxTerms = 10000;
+  static constexpr double kMaxSegments = 4000;  // (time.end - time.start) x controlPointsPerSecond
+  // Summed over the characters: (bodies + 6)^2 x segments x samplesPerSegment, the size of the
+  // dynamics' Jacobians the solve holds (a chain of 100 bodies over 10 s at 80 control points per
+  // second and 8 samples per segment, 7.2e7, took 4.5 GB and 30 s for its first iteration; a
+  // 30-body humanoid over 60 s at 40 control points per second and 6 samples, 3.1e6).
+  static constexpr double kMaxWork = 1e7;
 };
 
 struct TranscriptionSpec {

@@ -107,7 +107,7 @@ void Tape::gradient(const double* v, double time, std::size_t output, double* gr
     double& d = w[in.dst];
     double& pa = p[2 * i];
     double& pb = p[2 * i + 1];
-    const double x = w[in.a], y = w[in.b];
+    const double x = readsSlotA(in.op) ? w[in.a] : 0.0, y = readsSlotB(in.op) ? w[in.b] : 0.0;
     switch (in.op) {
       case Op::Const: d = constants_[in.a]; break;
       case Op::Var: d = v[in.a]; break;

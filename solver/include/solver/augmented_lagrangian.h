@@ -44,6 +44,10 @@ struct SolverOptions {
   // of 300-3005 (docs/STATUS.md, session 19).
   double warmRestartPenalty = 1e4;
   double maxSeconds = 300;       // wall-clock budget of the whole solve, Newton polish included
+  // Seconds of that budget already spent before this solve (the CLI's setup, the coarser
+  // transcriptions of a refined solve): the solve stops at maxSeconds - spentSeconds, and its
+  // reason names the whole budget.
+  double spentSeconds = 0;
   int threads = 1;               // Ceres evaluation threads
   bool warmStart = false;        // keep the problem's current multipliers and penalty
   // Free contact ends (lift-off instants) stay where they are until the constraints are within

@@ -2,7 +2,7 @@
 // motion.json (the Animation in the contract outside tools read), motion.glb (the animated scene
 // as glTF), one URDF and one BVH per character, and scene.json (the scene with the solver's state,
 // to resume from).
-// Every file is written atomically; the directory is created if needed.
+// The set is written all together or not at all (writeSolveOutputs).
 #pragma once
 
 #include <string>
@@ -23,8 +23,13 @@ std::string motionJson(const Animation& animation);
 // must share the time grid (sampleAnimation guarantees it).
 std::string motionCsv(const Animation& animation);
 
+// Whether `dir` can take a solve's outputs: a new directory in a writable one, or an existing
+// directory holding only what a solve writes (the outputs replace it as a whole). False with a
+// one-line reason otherwise. Creates nothing.
+bool checkOutputDirectory(const std::string& dir, std::string* error);
+
 // Writes summary.json, motion.json, motion.glb, scene.json, <character>.urdf and <character>.bvh
-// (the motion at the same rate) into dir. False with a reason on error.
+// (the motion at the same rate) as the directory dir, all together or not at all. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, double rateHz, const std::string& dir,
                        std::string* error, std::string* warning,

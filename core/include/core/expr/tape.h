@@ -19,6 +19,15 @@ struct Instruction {
   std::uint32_t dst, a, b;  // slots; for Const `a` indexes the tape's constants, for Var a variable
 };
 
+// Whether an instruction's `a` and `b` are slots: Const, Var and Time read other tables, unary
+// operations have no `b`, and a Spline's `b` indexes the tape's splines. The reverse sweeps read
+// the operands only where they are slots (reading them always ran past the slots: ASan).
+inline bool readsSlotA(Op op) { return op != Op::Const && op != Op::Var && op != Op::Time; }
+inline bool readsSlotB(Op op) {
+  return op == Op::Add || op == Op::Sub || op == Op::Mul || op == Op::Div || op == Op::Pow || op == Op::Min ||
+         op == Op::Max;
+}
+
 // The plain value of a scalar (double, ceres::Jet, Dual): what a spline's basis is looked up at.
 inline double valueOf(double x) { return x; }
 inline double valueOf(const Dual& x) { return x.v; }
@@ -147,9 +156,9 @@ void Tape::gradient(const T* v, const T& time, std::size_t output, T* grad, std:
   for (std::size_t i = code_.size(); i-- > 0;) {
     const Instruction& in = code_[i];
     const T a = adj[in.dst];
-    const T& x = w[in.a];
-    const T& y = w[in.b];
     const T& r = w[in.dst];
+    const T& x = readsSlotA(in.op) ? w[in.a] : r;
+    const T& y = readsSlotB(in.op) ? w[in.b] : r;
     switch (in.op) {
       case Op::Const:
       case Op::Time: break;
