@@ -9,6 +9,7 @@
 #include <QElapsedTimer>
 #include <QLineEdit>
 #include <QSettings>
+#include <QWheelEvent>
 #include <QStandardPaths>
 #include <QFile>
 #include <QFileInfo>
@@ -18,6 +19,7 @@
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
+#include <cstring>
 #include <QChartView>
 #include <QValueAxis>
 #include <cmath>
@@ -334,6 +336,91 @@ class EditorTest : public QObject {
     const EventLoopGap playing = luxoSolveGap(WindowMode::ShownPlaying);
     qInfo("window shown and playing: longest event-loop gap %lld ms, %d iterates drawn", playing.worstMs, playing.iterates);
     QVERIFY(playing.iterates >= 2);
+  }
+
+  // The safety net: a re-solve that stops without converging (here: Stop during the re-solve
+  // after a 27 cm drag of the landing) leaves the last converged motion on show, and one undo
+  // brings back exactly the motion of the scene it restores (the same q, byte for byte) without
+  // solving, auto-solve on. The stopped result stays at hand (Solve > Show the stopped result).
+  void aStoppedSolveKeepsTheLastGoodMotionAndUndoRestoresIt() {
+    MainWindow w;
+    QVERIFY(openLuxo(w));
+    w.setAutoSolve(true);
+    QVERIFY(w.solverJob()->waitForFinished(120000));
+    const auto good = w.document()->motion();
+    QVERIFY2(good && good->converged, qPrintable(w.statusText()));
+    QVERIFY(w.document()->showsSolutionOfScene());
+    const Eigen::MatrixXd q = good->animation.characters[0].q;
+
+    w.document()->edit("Drag the landing", [](Scene& s) {
+      for (TermSpec& t : s.terms)
+        if (t.id == "end_pose")
+          for (auto& [dof, value] : t.values)
+            if (dof == "base_x") value += 0.27;
+    }, kMergeTermField);
+    QTRY_VERIFY_WITH_TIMEOUT(w.solverJob()->isRunning(), 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() != good, 20000);  // a live iterate
+    w.stopSolve();
+    QVERIFY(w.solverJob()->waitForFinished(10000));
+    QTRY_VERIFY(w.document()->stoppedMotion() != nullptr);
+    QVERIFY(!w.document()->stoppedMotion()->converged);
+    QCOMPARE(w.document()->motion()->animation.characters[0].q, q);
+    QVERIFY2(w.statusText().contains("showing the last converged motion"), qPrintable(w.statusText()));
+
+    w.document()->undoStack()->undo();
+    QTest::qWait(200);
+    QVERIFY(!w.solverJob()->isRunning());
+    QVERIFY(w.document()->showsSolutionOfScene());
+    const Eigen::MatrixXd& back = w.document()->motion()->animation.characters[0].q;
+    QCOMPARE(back.rows(), q.rows());
+    QVERIFY(std::memcmp(back.data(), q.data(), sizeof(double) * q.size()) == 0);
+
+    // Redo returns to the dragged scene, whose re-solve had not converged: it solves again.
+    w.document()->undoStack()->redo();
+    QTRY_VERIFY_WITH_TIMEOUT(w.solverJob()->isRunning(), 5000);
+    w.stopSolve();
+    QVERIFY(w.solverJob()->waitForFinished(10000));
+    QTRY_VERIFY(w.document()->stoppedMotion() != nullptr);
+    const auto stopped = w.document()->stoppedMotion();
+    QAction* show = nullptr;
+    for (QAction* a : w.findChildren<QAction*>())
+      if (a->text().contains("stopped")) show = a;
+    QVERIFY(show && show->isEnabled());
+    show->trigger();
+    QCOMPARE(w.document()->motion(), stopped);
+    QVERIFY(!show->isEnabled());
+  }
+
+  // The wheel over an unfocused field of a form scrolls; it never edits the scene. K keys the
+  // pose at the current time (it was bound twice, and Qt ran neither).
+  void wheelNeverEditsAndKKeysThePose() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1280, 800)));
+    Document& doc = *w.document();
+    doc.selectBody(0, doc.scene().characters[0].bodies[1].id);
+    auto* mass = qobject_cast<QDoubleSpinBox*>(w.builder()->form()->editor("Mass"));
+    QVERIFY(mass);
+    QVERIFY(!mass->hasFocus());
+    const std::string before = json(doc);
+    const int commands = doc.undoStack()->count();
+    const QPointF at = QPointF(mass->rect().center());
+    for (int i = 0; i < 3; ++i) {
+      QWheelEvent wheel(at, mass->mapToGlobal(at), QPoint(), QPoint(0, 120), Qt::NoButton, Qt::NoModifier,
+                        Qt::NoScrollPhase, false);
+      QApplication::sendEvent(mass, &wheel);
+    }
+    QCOMPARE(json(doc), before);
+    QCOMPARE(doc.undoStack()->count(), commands);
+
+    doc.setCurrentTime(0.3);
+    w.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    QTest::keyClick(QApplication::focusWidget() ? QApplication::focusWidget() : &w, Qt::Key_K);
+    QCOMPARE(doc.undoStack()->count(), commands + 1);
+    const TermSpec& key = doc.scene().terms.back();
+    QVERIFY(key.kind == TermKind::Keyframe);
+    QCOMPARE(key.time, 0.3);
+    QCOMPARE(key.values.size(), doc.scene().characters[0].dofNames().size());
   }
 
   void stopLeavesAConsistentDocument() {

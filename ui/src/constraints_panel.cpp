@@ -45,7 +45,11 @@ ConstraintsPanel::ConstraintsPanel(Document* doc, QWidget* parent) : QWidget(par
   add->setPopupMode(QToolButton::InstantPopup);
   auto* menu = new QMenu(add);
   menu->addAction(tr("Pin the selected body here"), this, [this] { addPin(); });
-  menu->addAction(tr("Key the current pose"), QKeySequence(Qt::Key_K), this, [this] { keyCurrentPose(); });
+  // K is the window's shortcut (Edit > Key the current pose); here it is only shown. A second
+  // window-wide K made Qt report "Ambiguous shortcut overload" and K did nothing.
+  QAction* key = menu->addAction(tr("Key the current pose"), this, [this] { keyCurrentPose(); });
+  key->setShortcut(QKeySequence(Qt::Key_K));
+  key->setShortcutContext(Qt::WidgetShortcut);
   menu->addAction(tr("Rest"), this, [this] { addRest(); });
   menu->addAction(tr("Contact"), this, [this] { addContact(); });
   menu->addAction(tr("Clearance"), this, [this] { addClearance(); });

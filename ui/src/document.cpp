@@ -12,6 +12,14 @@ namespace {
 // Undo keeps whole scenes: compare them by their canonical text.
 bool sameScene(const Scene& a, const Scene& b) { return sceneToJson(a) == sceneToJson(b); }
 
+// The canonical text of a scene without its stored solution: what a solution solves.
+std::string problemKey(const Scene& scene) {
+  if (!scene.solution) return sceneToJson(scene);
+  Scene bare = scene;
+  bare.solution.reset();
+  return sceneToJson(bare);
+}
+
 // The motion a scene file stored with it, if it still fits the scene's problem; null if not.
 std::shared_ptr<const SolvedMotion> restoredMotion(const Scene& scene, const StoredSolution& stored) {
   std::string error;
@@ -42,11 +50,54 @@ void Document::edit(const QString& text, const std::function<void(Scene&)>& chan
 void Document::applyScene(const Scene& scene) {
   scene_ = scene;
   rebuildModels();
-  if (motion_ && !motionFitsScene(*motion_, scene_)) {
+  // Undo and redo bring back the converged motion of the scene they restore, as it was shown.
+  const std::string key = problemKey(scene_);
+  const auto known = std::find_if(solutions_.begin(), solutions_.end(), [&](const auto& e) { return e.first == key; });
+  if (known != solutions_.end() && known->second != motion_) {
+    motion_ = known->second;
+    lastGood_ = motion_;
+    emit motionChanged();
+  } else if (motion_ && !motionFitsScene(*motion_, scene_)) {
     motion_.reset();
     emit motionChanged();
   }
   emit sceneChanged();
+}
+
+void Document::remember(const std::shared_ptr<const SolvedMotion>& motion) {
+  if (!motion || !motion->converged || !motion->scene) return;
+  const std::string key = problemKey(*motion->scene);
+  solutions_.erase(std::remove_if(solutions_.begin(), solutions_.end(), [&](const auto& e) { return e.first == key; }),
+                   solutions_.end());
+  if (solutions_.size() >= kRemembered) solutions_.erase(solutions_.begin());
+  solutions_.emplace_back(key, motion);
+}
+
+bool Document::acceptResult(std::shared_ptr<const SolvedMotion> motion) {
+  if (!motion || !motionFitsScene(*motion, scene_)) return false;  // a result of an older structure
+  if (motion->converged || !lastGood_ || !motionFitsScene(*lastGood_, scene_)) {
+    if (motion->converged) {
+      remember(motion);
+      lastGood_ = motion;
+    }
+    stopped_.reset();
+    setMotion(std::move(motion));
+    return true;
+  }
+  stopped_ = std::move(motion);
+  setMotion(lastGood_);
+  return false;
+}
+
+void Document::showStoppedMotion() {
+  if (!stopped_) return;
+  auto shown = std::move(stopped_);
+  stopped_.reset();
+  setMotion(std::move(shown));
+}
+
+bool Document::showsSolutionOfScene() const {
+  return motion_ && motion_->converged && motion_->scene && problemKey(*motion_->scene) == problemKey(scene_);
 }
 
 void Document::reset(const Scene& scene, const QString& filePath) {
@@ -55,6 +106,10 @@ void Document::reset(const Scene& scene, const QString& filePath) {
   scene_.solution.reset();
   rebuildModels();
   motion_ = scene.solution ? restoredMotion(scene_, *scene.solution) : nullptr;
+  solutions_.clear();
+  stopped_.reset();
+  lastGood_ = motion_ && motion_->converged ? motion_ : nullptr;
+  remember(motion_);
   path_ = filePath;
   time_ = scene_.startTime;
   selCharacter_ = scene_.characters.empty() ? -1 : 0;
@@ -118,6 +173,10 @@ void Document::attachValidity(const SolvedMotion* motion, std::shared_ptr<const 
   if (!motion_ || motion_.get() != motion) return;
   auto checked = std::make_shared<SolvedMotion>(*motion_);
   checked->validity = std::move(report);
+  // The remembered solution and the last good motion carry the report too.
+  for (auto& e : solutions_)
+    if (e.second == motion_) e.second = checked;
+  if (lastGood_ == motion_) lastGood_ = checked;
   motion_ = std::move(checked);
   emit validityChanged();
 }

@@ -77,12 +77,14 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
                            .arg(m->iterations).arg(m->objective, 0, 'g', 6).arg(m->maxViolation, 0, 'g', 3));
   });
   connect(&job_, &SolverJob::finished, this, [this](std::shared_ptr<const SolvedMotion> m, const SolverSummary& s) {
-    doc_.setMotion(m);
-    progress_->setText(tr("%1 after %2 iterations (%3 s) · objective %4 · violation %5 · %6")
+    const bool shown = doc_.acceptResult(m);
+    progress_->setText(tr("%1 after %2 iterations (%3 s) · objective %4 · violation %5 · %6%7")
                            .arg(s.converged ? tr("Converged") : tr("Stopped"))
                            .arg(s.iterations).arg(s.solveSeconds, 0, 'f', 2)
                            .arg(s.objective, 0, 'g', 6).arg(s.maxViolation, 0, 'g', 3)
-                           .arg(QString::fromStdString(s.reason)));
+                           .arg(QString::fromStdString(s.reason))
+                           .arg(shown ? QString() : tr(" · showing the last converged motion (Solve ▸ Show the stopped result)")));
+    showStoppedAction_->setEnabled(doc_.stoppedMotion() != nullptr);
     solveAction_->setEnabled(true);
     stopAction_->setEnabled(false);
   });
@@ -98,8 +100,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   resolveTimer_.setSingleShot(true);
   resolveTimer_.setInterval(0);
   connect(&resolveTimer_, &QTimer::timeout, this, &MainWindow::solve);
+  // Undo and redo to a scene whose converged motion the document remembers show it at once: no
+  // re-solve (it would only find the same motion again, or stall where it had converged).
   connect(doc_.undoStack(), &QUndoStack::indexChanged, this, [this] {
-    if (autoSolve_) resolveTimer_.start();
+    if (autoSolve_ && !doc_.showsSolutionOfScene()) resolveTimer_.start();
   });
   connect(doc_.undoStack(), &QUndoStack::cleanChanged, this, &MainWindow::updateTitle);
   connect(&doc_, &Document::filePathChanged, this, &MainWindow::updateTitle);
@@ -234,6 +238,14 @@ void MainWindow::createActions() {
   solveAction_ = action(solveMenu, tr("&Solve"), QKeySequence(Qt::Key_F5), [this] { solve(); });
   stopAction_ = action(solveMenu, tr("S&top"), QKeySequence(Qt::Key_Escape), [this] { stopSolve(); });
   stopAction_->setEnabled(false);
+  showStoppedAction_ = solveMenu->addAction(tr("Show the stopped &result"));
+  showStoppedAction_->setToolTip(tr("A solve that stops without converging keeps the last converged motion on show; "
+                                    "this shows the stopped one instead, to inspect it or continue from it"));
+  showStoppedAction_->setEnabled(false);
+  connect(showStoppedAction_, &QAction::triggered, this, [this] {
+    doc_.showStoppedMotion();
+    showStoppedAction_->setEnabled(false);
+  });
   autoSolveAction_ = solveMenu->addAction(tr("&Auto-solve after every edit"));
   autoSolveAction_->setCheckable(true);
   autoSolveAction_->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_R));

@@ -5,6 +5,7 @@
 #include <QDoubleSpinBox>
 #include <QHBoxLayout>
 #include <QLineEdit>
+#include <QWheelEvent>
 
 namespace spacetime::ui {
 
@@ -37,8 +38,24 @@ QWidget* PropertyForm::editor(const QString& label) const {
 }
 
 namespace {
+// A form's fields take the mouse wheel only once they have the keyboard focus (a click or Tab):
+// unfocused, the wheel scrolls the form, as in Blender and Maya. Qt's fields edit their value
+// under a passing wheel, and scrolling a long form changed Mass, Density or a contact's end -
+// each a silent edit and, with auto-solve, a re-solve.
+template <class Field>
+class FocusedWheelField : public Field {
+ public:
+  FocusedWheelField() { this->setFocusPolicy(Qt::StrongFocus); }
+
+ protected:
+  void wheelEvent(QWheelEvent* e) override {
+    if (this->hasFocus()) Field::wheelEvent(e);
+    else e->ignore();  // to the scroll area around the form
+  }
+};
+
 QDoubleSpinBox* spinBox(double min, double max, double step, int decimals) {
-  auto* s = new QDoubleSpinBox;
+  auto* s = new FocusedWheelField<QDoubleSpinBox>;
   s->setRange(min, max);
   s->setSingleStep(step);
   s->setDecimals(decimals);
@@ -105,7 +122,7 @@ void PropertyForm::addText(const QString& label, std::function<std::string(const
 
 void PropertyForm::addChoice(const QString& label, const QStringList& choices,
                              std::function<int(const Scene&)> get, std::function<void(Scene&, int)> set) {
-  auto* c = new QComboBox;
+  auto* c = new FocusedWheelField<QComboBox>;
   c->addItems(choices);
   const int row = static_cast<int>(rows_.size());
   connect(c, &QComboBox::currentIndexChanged, this,

@@ -2,7 +2,11 @@
 // current time and the selection. Every change to the scene is an undo command (EditScene, a
 // snapshot of the scene before and after, merged while the same drag or field goes on), so
 // undo/redo always restores an identical scene. A solver result is not an edit: it replaces the
-// motion and leaves the undo stack alone. Views observe the signals and never call each other.
+// motion and leaves the undo stack alone - but every converged motion is remembered as the
+// solution of its scene, so undo and redo bring back the motion the user saw without solving,
+// and a solve that stops without converging never replaces the last converged motion (the safety
+// net: the stopped result is kept aside to inspect or accept). Views observe the signals and
+// never call each other.
 #pragma once
 
 #include <QObject>
@@ -54,6 +58,19 @@ class Document : public QObject {
   // The motion on show: null when none fits the scene.
   std::shared_ptr<const SolvedMotion> motion() const { return motion_; }
   void setMotion(std::shared_ptr<const SolvedMotion> motion);
+  // A solve's final motion. A converged one goes on show and is remembered as the solution of
+  // its scene. One that stopped without converging (stalled, out of time, Stop) goes on show only
+  // when there is no converged motion that fits the scene to keep showing; otherwise the last
+  // converged motion stays (or comes back, after the live iterates) and the stopped one is kept
+  // as stoppedMotion(). Returns whether `motion` is on show.
+  bool acceptResult(std::shared_ptr<const SolvedMotion> motion);
+  // The last result that stopped without converging and was not put on show (null when none).
+  std::shared_ptr<const SolvedMotion> stoppedMotion() const { return stopped_; }
+  // Puts the stopped result on show (to inspect it, or to continue from it).
+  void showStoppedMotion();
+  // Whether the motion on show is a converged solution of exactly the current scene: a re-solve
+  // would find it again.
+  bool showsSolutionOfScene() const;
   // Attaches a validity report to the current motion if it is still `motion` (a report that
   // arrives after a newer motion is dropped). Emits validityChanged, not motionChanged: nothing
   // needs redrawing but the validity view.
@@ -92,6 +109,12 @@ class Document : public QObject {
   QString path_;
   std::vector<Model<double>> models_;
   std::shared_ptr<const SolvedMotion> motion_;
+  // Converged motions by the canonical text of the scene they solve (at most kRemembered, the
+  // oldest dropped first), the last converged motion put on show, and the stopped result aside.
+  static constexpr size_t kRemembered = 64;
+  std::vector<std::pair<std::string, std::shared_ptr<const SolvedMotion>>> solutions_;
+  std::shared_ptr<const SolvedMotion> lastGood_, stopped_;
+  void remember(const std::shared_ptr<const SolvedMotion>& motion);
   double time_ = 0;
   int selCharacter_ = -1;
   std::string selBody_, selTerm_;

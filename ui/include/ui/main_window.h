@@ -95,6 +95,7 @@ class MainWindow : public QMainWindow {
   QAction* solveAction_ = nullptr;
   QAction* stopAction_ = nullptr;
   QAction* autoSolveAction_ = nullptr;
+  QAction* showStoppedAction_ = nullptr;
   bool autoSolve_ = false;
   QTimer autosaveTimer_;
   QTimer resolveTimer_;  // coalesces bursts of edits into one re-solve
