@@ -696,7 +696,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     // many conditions as the root polynomial has free coefficients. Anchors at every sample
     // instead fix positions only, and a 1e-5 m anchor violation buys a large root acceleration
     // at a sample: the lamp rooted at its head (contacts on its base, a leaf) stopped after 100
-    // multiplier updates at objective 66 (docs/STATUS.md, session 15); now it converges to the
+    // multiplier updates at objective 66; now it converges to the
     // base-rooted jump. Free lift-offs keep the anchors (their samples move with the end).
     const bool stillByAcceleration = !ct.holdsRoot && ct.freeEnd < 0;
     if (stillByAcceleration) {

@@ -30,7 +30,7 @@ struct SolverOptions {
   // nearFeasiblePenalty (nor maxPenalty; one already higher stays): from there the multiplier
   // updates close the gap, and a larger penalty only stiffens the inner solves, whose
   // Gauss-Newton steps then crawl along the constraints (the head-rooted lamp, which no polish
-  // ends: 3601 -> 1261 iterations; free lift-offs 23-35 % fewer; docs/STATUS.md, session 19).
+  // ends: 3601 -> 1261 iterations; free lift-offs 23-35 % fewer).
   // Without any growth below nearFeasible, solves stalled at violations of 1e-7 - 1e-6 with the
   // penalty still at 1e4.
   double nearFeasible = 1e-4;
@@ -41,7 +41,7 @@ struct SolverOptions {
   // 34.530 against the cold solve's 32.094; the power-formula jump's moved +10 cm: 9908 to 6222
   // against 5410.85). At 1e4 both land on the cold optimum, in 299 and 300 iterations, and the
   // edits of the jump, hurdle and heavy lamp by -10 to +20 cm take 120-1140 LM iterations instead
-  // of 300-3005 (docs/STATUS.md, session 19).
+  // of 300-3005.
   double warmRestartPenalty = 1e4;
   double maxSeconds = 300;       // wall-clock budget of the whole solve, Newton polish included
   // Seconds of that budget already spent before this solve (the CLI's setup, the coarser

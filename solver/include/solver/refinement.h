@@ -18,7 +18,7 @@
 // (cancelled, out of time, numerical failure, invalid options).
 //
 // The refinement is uniform: every interval gets finer, also where the residual was small.
-// Measured on the jump ladder (tests/scenes/ladder/; docs/STATUS.md, "Solver core (issue 29)").
+// Measured on the jump ladder (tests/scenes/ladder/; docs/validation.md).
 #pragma once
 
 #include <atomic>

@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Re-measures every speed figure docs/performance.md and the README quote, on this machine, from
+# the Release build: the solve and expression benchmarks (medians of 5 repetitions) and the jump
+# ladder through spacetime-cli (single runs: the rungs take seconds to tens of seconds). Prints
+# the tables in the documents' form. Takes about 10 minutes on the 2-core machine.
+#
+#   scripts/measure.sh            everything
+#   scripts/measure.sh benchmarks the benchmarks only
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli > /dev/null
+bench=build/tests/benchmarks
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+echo "## Solves from the default guess (solve_benchmark, medians of 5)"
+echo
+"$bench/solve_benchmark" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+  --benchmark_format=json --benchmark_out="$tmp/solve.json" --benchmark_out_format=json > /dev/null
+python3 - "$tmp/solve.json" <<'PY'
+import json, sys
+rows = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("aggregate_name") == "median"]
+print("| benchmark | median | LM iterations + Newton steps | converged |")
+print("|---|---|---|---|")
+for b in rows:
+    name = b["run_name"].replace("BM_", "").replace("/iterations:1", "").replace("/real_time", "")
+    t = b["real_time"]
+    unit = b["time_unit"]
+    ms = t / 1e6 if unit == "ns" else t / 1e3 if unit == "us" else t if unit == "ms" else t * 1e3
+    when = f"{ms:.3g} ms" if ms < 1000 else f"{ms / 1000:.3g} s"
+    steps = ""
+    if "lm_iterations" in b:
+        steps = f"{b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}"
+    elif "rows" in b:
+        steps = f"{b['rows']:.0f} rows x {b['cols']:.0f} columns"
+    conv = {1: "yes", 0: "no"}.get(b.get("converged"), "")
+    print(f"| {name} | {when} | {steps} | {conv} |")
+PY
+echo
+echo "## Expression tape vs native RNEA (expr_benchmark, medians of 5)"
+echo
+"$bench/expr_benchmark" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+  --benchmark_format=json --benchmark_out="$tmp/expr.json" --benchmark_out_format=json > /dev/null
+python3 - "$tmp/expr.json" <<'PY'
+import json, sys
+rows = {b["run_name"]: b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("aggregate_name") == "median"}
+def ns(b):
+    return b["real_time"] * {"ns": 1, "us": 1e3, "ms": 1e6}[b["time_unit"]]
+tape, native = ns(rows["BM_SymbolicRneaTape"]), ns(rows["BM_NativeRnea"])
+print("| figure | median |")
+print("|---|---|")
+print(f"| planar lamp's RNEA as a compiled tape | {tape:.0f} ns |")
+print(f"| the same RNEA, native templated code | {native:.0f} ns |")
+print(f"| tape / native | {tape / native:.2f}x |")
+for name in ("BM_TapeEvaluate", "BM_TapeGradient"):
+    print(f"| {name[3:]} | {ns(rows[name]) / 1e3:.2f} us |")
+PY
+echo
+echo "## The editor (editor_benchmark under Xvfb, Mesa llvmpipe, medians of 5)"
+echo
+xvfb-run -a -s "-screen 0 1600x1000x24" "$bench/editor_benchmark" --benchmark_repetitions=5 \
+  --benchmark_report_aggregates_only=true --benchmark_format=json --benchmark_out="$tmp/editor.json" \
+  --benchmark_out_format=json > /dev/null 2>&1
+python3 - "$tmp/editor.json" <<'PY'
+import json, sys
+print("| benchmark | median |")
+print("|---|---|")
+for b in json.load(open(sys.argv[1]))["benchmarks"]:
+    if b.get("aggregate_name") != "median":
+        continue
+    name = b["run_name"].replace("BM_", "").split("/iterations")[0].replace("/manual_time", "")
+    ms = b["real_time"] * {"ns": 1e-6, "us": 1e-3, "ms": 1, "s": 1e3}[b["time_unit"]]
+    if "gap_ms" in b:  # the figure is the longest gap, not the run's length
+        print(f"| {name}: longest event-loop gap | {b['gap_ms']:.3g} ms |")
+    else:
+        print(f"| {name} | {ms:.3g} ms |")
+PY
+[ "${1:-}" = benchmarks ] && exit 0
+
+echo
+echo "## The jump ladder (spacetime-cli solve, 2 threads, single runs)"
+echo
+echo "| scene | exit | objective | transcriptions tried | seconds |"
+echo "|---|---|---|---|---|"
+for scene in tests/scenes/ladder/*.json; do
+  name=$(basename "$scene" .json)
+  set +e
+  build/app/spacetime-cli solve "$scene" --out "$tmp/$name" --quiet --max-seconds 120 2> /dev/null
+  status=$?
+  set -e
+  python3 - "$tmp/$name/summary.json" "$name" "$status" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+tried = ", ".join(f"{a['control_points_per_second']:g}/{a['samples_per_segment']}" for a in s.get("refinement", [])) or "the scene's"
+total = sum(a["seconds"] for a in s.get("refinement", [])) or s["solve_seconds"]
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6g} | {tried} | {total:.1f} |")
+PY
+done
