@@ -423,6 +423,20 @@ class EditorTest : public QObject {
     QCOMPARE(key.values.size(), doc.scene().characters[0].dofNames().size());
   }
 
+  // File > New starts from a clean status: not the previous scene's solve result.
+  void newSceneClearsThePreviousResult() {
+    MainWindow w;
+    QVERIFY(solvedParticle(w));
+    QVERIFY2(w.statusText().contains("Converged"), qPrintable(w.statusText()));
+    QAction* fresh = nullptr;
+    for (QAction* a : w.findChildren<QAction*>())
+      if (a->text() == "&New") fresh = a;
+    QVERIFY(fresh);
+    fresh->trigger();
+    QCOMPARE(w.statusText(), QString("Ready"));
+    QVERIFY(!w.document()->motion());
+  }
+
   void stopLeavesAConsistentDocument() {
     MainWindow w;
     QVERIFY(openLuxo(w));
@@ -589,6 +603,9 @@ class EditorTest : public QObject {
     QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
     QVERIFY(!w.document()->motion()->converged);
     QVERIFY2(w.validity()->verdict().contains("unmet"), qPrintable(w.validity()->verdict()));
+    // Never "valid" above unmet rows, even where every check of the motion itself passes.
+    QVERIFY2(w.validity()->verdict().startsWith("Not valid"), qPrintable(w.validity()->verdict()));
+    QVERIFY2(!w.validity()->verdict().contains("Physically valid"), qPrintable(w.validity()->verdict()));
     QTreeWidget* rows = w.validity()->list();
     QVERIFY(rows->topLevelItemCount() > 2);
     QStringList top{rows->topLevelItem(0)->text(0), rows->topLevelItem(1)->text(0)};

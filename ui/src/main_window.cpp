@@ -132,9 +132,12 @@ void MainWindow::createActions() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   action(file, tr("&New"), QKeySequence::New, [this] {
     if (!maybeSave()) return;
+    job_.cancel();
     Scene s;
     s.name = "untitled";
     doc_.reset(s, {});
+    progress_->setText(tr("Ready"));  // not the previous scene's result
+    showStoppedAction_->setEnabled(false);
   });
   action(file, tr("&Open…"), QKeySequence::Open, [this] {
     if (!maybeSave()) return;
@@ -273,6 +276,8 @@ void MainWindow::updateTitle() {
 bool MainWindow::openFile(const QString& path, QString* error) {
   job_.cancel();
   if (!doc_.open(path, error)) return false;
+  progress_->setText(doc_.motion() ? tr("Opened with its solved motion") : tr("Ready"));
+  showStoppedAction_->setEnabled(false);
   if (!path.startsWith(":/")) addRecent(path);
   viewport_->frameAll();
   if (solveOnOpen && !doc_.motion()) solve();

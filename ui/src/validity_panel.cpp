@@ -104,12 +104,23 @@ void ValidityPanel::rebuild() {
     for (int column = 0; column < 3; ++column) item->setToolTip(column, tip);
     if (!c.pass) ++failing;
   }
-  QString verdict = failing == 0 ? tr("Physically valid: all %1 checks pass.").arg(checks.size())
-                                 : tr("%1 of %2 checks fail: the motion is not physical between the samples "
-                                      "or does not meet its terms.").arg(failing).arg(checks.size());
-  if (!motion->violated.empty())
-    verdict = tr("The solve stopped with constraints unmet (listed first; when the violation stalled, they "
-                 "conflict with each other). ") + verdict;
+  // "Valid" only when every check passes and the solve met every constraint: a stopped solve's
+  // unmet rows above must never sit under a "valid" verdict.
+  const int unmet = static_cast<int>(motion->violated.size());
+  QString verdict;
+  if (unmet > 0)
+    verdict = tr("Not valid: the solve stopped with %n constraint(s) unmet (listed first; when the violation "
+                 "stalled, they conflict with each other). ", nullptr, unmet) +
+              (failing == 0 ? tr("The %1 checks below pass.").arg(checks.size())
+                            : tr("%1 of %2 checks fail.").arg(failing).arg(checks.size()));
+  else if (failing > 0)
+    verdict = tr("%1 of %2 checks fail: the motion is not physical between the samples "
+                 "or does not meet its terms.").arg(failing).arg(checks.size());
+  else if (!motion->converged)
+    verdict = tr("All %1 checks pass, but the solve stopped before converging: solve again to finish it.")
+                  .arg(checks.size());
+  else
+    verdict = tr("Physically valid: all %1 checks pass.").arg(checks.size());
   // After an edit the motion on screen is still the last solve's, checked against its own scene.
   if (motion->scene && sceneToJson(*motion->scene) != sceneToJson(doc_->scene()))
     verdict = tr("The scene changed since this solve; these checks are of the solved scene. ") + verdict;
