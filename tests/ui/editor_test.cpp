@@ -299,6 +299,29 @@ class EditorTest : public QObject {
     QVERIFY(!QFile::exists(w.autosavePath()));
   }
 
+  // A live window's autosave is never taken for a crash's leftover (its lock is held), and an
+  // edit is autosaved a few seconds after it, not only every 30 s.
+  void aLiveWindowsAutosaveIsNotRecoveredAndEditsAreSavedSoon() {
+    for (const QString& f : MainWindow::pendingRecoveries()) QFile::remove(f);
+    auto* first = new MainWindow;
+    QVERIFY(openScene(*first, ":/scenes/particle.json"));
+    first->document()->edit("Move pin", [](Scene& s) {
+      for (TermSpec& t : s.terms)
+        if (t.kind == TermKind::Pin) t.position.y() += 0.25;
+    });
+    QElapsedTimer clock;
+    clock.start();
+    QTRY_VERIFY_WITH_TIMEOUT(QFile::exists(first->autosavePath()), 3 * MainWindow::kAutosaveDelayMs);
+    QVERIFY(clock.elapsed() < 3 * MainWindow::kAutosaveDelayMs);
+    const QString path = first->autosavePath();
+    MainWindow second;  // another editor instance starting up
+    QVERIFY(!MainWindow::pendingRecoveries().contains(path));
+    QVERIFY(QFile::exists(path));
+    delete first;  // no closeEvent: as if the process had died
+    QVERIFY(MainWindow::pendingRecoveries().contains(path));
+    QVERIFY(QFile::remove(path));
+  }
+
   // The longest event-loop gap in the first 4 s of a Luxo solve from the default guess, and the
   // iterates that reached the interface.
   static EventLoopGap luxoSolveGap(WindowMode mode) {

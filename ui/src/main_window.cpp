@@ -9,6 +9,7 @@
 #include <QFileInfo>
 #include <QJsonDocument>
 #include <QJsonObject>
+#include <QLockFile>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QMimeData>
@@ -38,6 +39,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   setObjectName("mainWindow");
   setAcceptDrops(true);
   autosaveId_ = QUuid::createUuid().toString(QUuid::WithoutBraces);
+  QDir().mkpath(autosaveDirectory());
+  autosaveLock_ = std::make_unique<QLockFile>(autosaveDirectory() + "/" + autosaveId_ + ".lock");
+  autosaveLock_->tryLock(0);
 
   viewport_ = new Viewport(&doc_);
   setCentralWidget(viewport_);
@@ -110,6 +114,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   autosaveTimer_.setInterval(30000);
   connect(&autosaveTimer_, &QTimer::timeout, this, &MainWindow::writeAutosave);
   autosaveTimer_.start();
+  autosaveSoon_.setSingleShot(true);
+  autosaveSoon_.setInterval(kAutosaveDelayMs);
+  connect(&autosaveSoon_, &QTimer::timeout, this, &MainWindow::writeAutosave);
+  connect(doc_.undoStack(), &QUndoStack::indexChanged, &autosaveSoon_, qOverload<>(&QTimer::start));
 
   QSettings settings;
   restoreGeometry(settings.value("window/geometry").toByteArray());
@@ -403,24 +411,54 @@ bool MainWindow::writeAutosave() {
 QStringList MainWindow::pendingRecoveries() {
   QDir dir(autosaveDirectory());
   QStringList out;
-  for (const QString& name : dir.entryList({"*.json"}, QDir::Files, QDir::Time)) out << dir.filePath(name);
+  for (const QString& name : dir.entryList({"*.json"}, QDir::Files, QDir::Time)) {
+    // A live window holds its lock; a crashed one's lock is stale and taken over here.
+    QLockFile lock(dir.filePath(QFileInfo(name).completeBaseName() + ".lock"));
+    if (!lock.tryLock(0)) continue;
+    lock.unlock();
+    out << dir.filePath(name);
+  }
   return out;
 }
 
 void MainWindow::offerRecovery() {
-  // Files left by a session that did not close cleanly (ours are removed on close).
+  // Files left by windows that did not close cleanly (ours are removed on close), newest first.
+  // Each is offered by itself: recovered (into this window, or a new one once this one holds a
+  // recovered scene), discarded, or kept for the next start. Only what the user recovered or
+  // discarded is deleted.
+  static bool offered = false;  // once per process: windows opened by the recovery do not ask again
+  if (offered || qEnvironmentVariableIsSet("SPACETIME_NO_RECOVERY")) return;
+  offered = true;
   QStringList files = pendingRecoveries();
   files.removeAll(autosavePath());
-  if (files.isEmpty() || qEnvironmentVariableIsSet("SPACETIME_NO_RECOVERY")) return;
-  const auto answer = QMessageBox::question(
-      this, tr("Recover"), tr("Spacetime did not close cleanly. Recover the unsaved scene autosaved at %1?")
-                               .arg(QFileInfo(files.front()).lastModified().toString()),
-      QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
-  QString error;
-  if (answer == QMessageBox::Yes && !recoverAutosave(files.front(), &error))
-    QMessageBox::warning(this, tr("Recover"), error);
-  if (answer != QMessageBox::No)
-    for (const QString& f : files) QFile::remove(f);
+  bool recoveredHere = false;
+  for (const QString& file : files) {
+    const SceneLoadResult peek = loadSceneFile(file.toStdString());
+    const QString name = peek.scene ? QString::fromStdString(peek.scene->name) : QFileInfo(file).fileName();
+    const auto answer = QMessageBox::question(
+        this, tr("Recover"),
+        tr("Spacetime did not close cleanly. Recover the unsaved scene \"%1\", autosaved at %2?\n\n"
+           "No keeps it for the next start; Discard deletes it.")
+            .arg(name, QFileInfo(file).lastModified().toString()),
+        QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
+    if (answer == QMessageBox::No) continue;
+    if (answer == QMessageBox::Yes) {
+      MainWindow* target = this;
+      if (recoveredHere) {
+        target = new MainWindow;
+        target->setAttribute(Qt::WA_DeleteOnClose);
+        target->show();
+      }
+      QString error;
+      if (!target->recoverAutosave(file, &error)) {
+        QMessageBox::warning(this, tr("Recover"), error);
+        continue;  // kept: it may be read by a later version
+      }
+      recoveredHere = true;
+      target->writeAutosave();  // under the recovering window's own name before the old goes
+    }
+    QFile::remove(file);
+  }
 }
 
 bool MainWindow::recoverAutosave(const QString& file, QString* error) {

@@ -8,9 +8,11 @@
 #pragma once
 
 #include <QLabel>
+#include <QLockFile>
 #include <QMainWindow>
 #include <QTimer>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "ui/builder_panel.h"
@@ -56,10 +58,12 @@ class MainWindow : public QMainWindow {
   bool exportGltf(const QString& path, QString* error);       // one .glb: every character, animated
   bool exportImageSequence(const QString& directory, QString* error);  // frame_0000.png ...
 
-  // Autosave: the file the current document autosaves to, writing it, and the recovery check.
+  // Autosave: the file the current document autosaves to, writing it, and the recovery check:
+  // the autosaves of windows that are no longer running (their lock is free), newest first.
   QString autosavePath() const;
   bool writeAutosave();
   static QStringList pendingRecoveries();
+  static constexpr int kAutosaveDelayMs = 2000;  // after the last edit
   // Opens the scene autosaved in `file` by a session that did not close cleanly, as a modified
   // document without a file (Save asks where). The prompt at start-up calls it.
   bool recoverAutosave(const QString& file, QString* error);
@@ -98,8 +102,12 @@ class MainWindow : public QMainWindow {
   QAction* showStoppedAction_ = nullptr;
   bool autoSolve_ = false;
   QTimer autosaveTimer_;
+  QTimer autosaveSoon_;  // a few seconds after the last edit: a crash loses only that much
   QTimer resolveTimer_;  // coalesces bursts of edits into one re-solve
   QString autosaveId_;
+  // Held while this window lives: another instance's recovery check sees a live autosave, not a
+  // crash's leftover (a crashed process's lock is stale and taken over).
+  std::unique_ptr<QLockFile> autosaveLock_;
 };
 
 }  // namespace spacetime::ui
