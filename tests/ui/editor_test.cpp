@@ -3,6 +3,7 @@
 // user would check: the motion meets the pin, undo/redo restores identical documents, saving
 // loses nothing, the interface never stalls while the solver runs, Stop leaves a consistent
 // document, and the viewport draws the lamp in its colours.
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
@@ -458,6 +459,53 @@ class EditorTest : public QObject {
     fresh->trigger();
     QCOMPARE(w.statusText(), QString("Ready"));
     QVERIFY(!w.document()->motion());
+  }
+
+  // The Scene panel reaches the scene-wide fields a new character needs (clip, gravity, ground,
+  // objective, resolution), each edit one undo command; a clip end before its start is kept
+  // after it.
+  void sceneSettingsEditTheSceneUndoably() {
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/particle.json"));
+    Document& doc = *w.document();
+    PropertyForm* form = w.sceneSettings()->form();
+    const int commands = doc.undoStack()->count();
+    auto* end = qobject_cast<QDoubleSpinBox*>(form->editor("Clip end"));
+    QVERIFY(end);
+    end->setValue(2.5);
+    QCOMPARE(doc.scene().endTime, 2.5);
+    setSpin(form->editor("Gravity"), "y", -1.62);
+    QCOMPARE(doc.scene().gravity.y(), -1.62);
+    auto* ground = qobject_cast<QCheckBox*>(form->editor("Ground"));
+    QVERIFY(ground);
+    QVERIFY(!doc.scene().groundEnabled);
+    ground->setChecked(true);
+    QVERIFY(doc.scene().groundEnabled);
+    auto* height = qobject_cast<QDoubleSpinBox*>(form->editor("Ground height"));
+    QVERIFY(height);
+    height->setValue(-1);  // under the particle's lowest pin (at y = 0 a pin would hold the ball in it)
+    QCOMPARE(doc.scene().groundHeight, -1.0);
+    auto* rate = qobject_cast<QDoubleSpinBox*>(form->editor("Control points per second"));
+    QVERIFY(rate);
+    rate->setValue(30);
+    QCOMPARE(doc.scene().transcription.controlPointsPerSecond, 30.0);
+    auto* samples = qobject_cast<QComboBox*>(form->editor("Samples per segment"));
+    QVERIFY(samples);
+    samples->setCurrentIndex(3);
+    QCOMPARE(doc.scene().transcription.samplesPerSegment, 4);
+    QCOMPARE(doc.undoStack()->count(), commands + 6);
+    end->setValue(-5);  // before the start: kept after it
+    QVERIFY(doc.scene().endTime > doc.scene().startTime);
+    QCOMPARE(end->value(), doc.scene().endTime);
+    doc.undoStack()->undo();
+    QCOMPARE(doc.scene().endTime, 2.5);
+    // The edited scene solves (the particle over 2.5 s under moon gravity).
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QVERIFY2(doc.motion() && doc.motion()->converged, qPrintable(w.statusText()));
+    while (doc.undoStack()->canUndo() && doc.undoStack()->index() > commands) doc.undoStack()->undo();
+    QCOMPARE(doc.scene().endTime, 1.0);
+    QCOMPARE(end->value(), 1.0);
   }
 
   void stopLeavesAConsistentDocument() {

@@ -9,10 +9,12 @@
 #include <QFileInfo>
 #include <QJsonDocument>
 #include <QJsonObject>
+#include <QLayout>
 #include <QLockFile>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QMimeData>
+#include <QPointer>
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
@@ -57,6 +59,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   timeline_ = new Timeline(&doc_);
   graphs_ = new GraphPanel(&doc_);
   QDockWidget* builderDock = dock(tr("Builder"), "builderDock", builder_, Qt::LeftDockWidgetArea);
+  sceneSettings_ = new SceneSettingsPanel(&doc_);
+  QDockWidget* sceneDock = dock(tr("Scene"), "sceneDock", sceneSettings_, Qt::LeftDockWidgetArea);
+  tabifyDockWidget(builderDock, sceneDock);
+  builderDock->raise();
   QDockWidget* constraintsDock = dock(tr("Constraints"), "constraintsDock", constraints_, Qt::RightDockWidgetArea);
   QDockWidget* timelineDock = dock(tr("Timeline"), "timelineDock", timeline_, Qt::BottomDockWidgetArea);
   QDockWidget* graphDock = dock(tr("Graphs"), "graphDock", graphs_, Qt::BottomDockWidgetArea);
@@ -72,7 +78,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   statusBar()->addPermanentWidget(progress_, 1);
 
   createActions();
-  for (QDockWidget* d : {builderDock, constraintsDock, validityDock, timelineDock, graphDock})
+  for (QDockWidget* d : {builderDock, sceneDock, constraintsDock, validityDock, timelineDock, graphDock})
     findChild<QMenu*>("viewMenu")->addAction(d->toggleViewAction());
 
   connect(&job_, &SolverJob::iterate, this, [this](std::shared_ptr<const SolvedMotion> m) {
@@ -127,7 +133,26 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   QTimer::singleShot(0, this, &MainWindow::offerRecovery);
 }
 
-MainWindow::~MainWindow() { job_.cancel(); }
+MainWindow::~MainWindow() {
+  job_.cancel();
+  // C++ destroys the members (the document, the job, the timers) before the QWidget base deletes
+  // the child widgets, and those panels and this window's slots use the document. Left to that
+  // order, the undo stack's clear() at the document's end ran this window's slots on destroyed
+  // timers, and a panel being deleted could edit a destroyed document: heap corruption
+  // ("malloc_consolidate(): unaligned fastbin chunk detected") after a test's window closed.
+  // So: no signal of the document or the job reaches anything from here on, and the widgets
+  // go while the document they show is whole.
+  doc_.undoStack()->disconnect();
+  doc_.disconnect();
+  job_.disconnect();
+  autosaveTimer_.stop();
+  autosaveSoon_.stop();
+  resolveTimer_.stop();
+  QList<QPointer<QObject>> children;
+  for (QObject* child : this->children())
+    if (!qobject_cast<QLayout*>(child)) children.append(child);  // the window's own layout stays
+  for (const QPointer<QObject>& child : children) delete child.data();
+}
 
 void MainWindow::createActions() {
   auto action = [this](QMenu* menu, const QString& text, const QKeySequence& key, auto slot) {

@@ -19,6 +19,7 @@
 #include "ui/constraints_panel.h"
 #include "ui/document.h"
 #include "ui/graph_panel.h"
+#include "ui/scene_settings_panel.h"
 #include "ui/validity_panel.h"
 #include "ui/solver_job.h"
 #include "ui/timeline.h"
@@ -37,6 +38,7 @@ class MainWindow : public QMainWindow {
   Viewport* viewport() { return viewport_; }
   Timeline* timeline() { return timeline_; }
   BuilderPanel* builder() { return builder_; }
+  SceneSettingsPanel* sceneSettings() { return sceneSettings_; }
   ConstraintsPanel* constraints() { return constraints_; }
   GraphPanel* graphs() { return graphs_; }
   ValidityPanel* validity() { return validity_; }
@@ -91,6 +93,7 @@ class MainWindow : public QMainWindow {
   Viewport* viewport_;
   Timeline* timeline_;
   BuilderPanel* builder_;
+  SceneSettingsPanel* sceneSettings_ = nullptr;
   ConstraintsPanel* constraints_;
   GraphPanel* graphs_;
   ValidityPanel* validity_;

@@ -1,0 +1,61 @@
+#include "ui/scene_settings_panel.h"
+
+#include <QScrollArea>
+#include <QVBoxLayout>
+#include <algorithm>
+
+namespace spacetime::ui {
+
+namespace {
+// The shortest clip a scene can have: a transcription needs at least one segment of it.
+constexpr double kShortestClip = 0.05;
+}  // namespace
+
+SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
+    : QWidget(parent), doc_(doc), form_(new PropertyForm(doc, kMergeSceneField)) {
+  auto* layout = new QVBoxLayout(this);
+  layout->setContentsMargins(2, 2, 2, 2);
+  auto* scroll = new QScrollArea;
+  scroll->setWidget(form_);
+  scroll->setWidgetResizable(true);
+  layout->addWidget(scroll);
+
+  PropertyForm& f = *form_;
+  f.addText(tr("Name"), [](const Scene& s) { return s.name; }, [](Scene& s, const std::string& v) { s.name = v; });
+  // The clip: its end stays after its start (the loader's rule), by at least kShortestClip.
+  f.addDouble(tr("Clip start"), [](const Scene& s) { return s.startTime; },
+              [](Scene& s, double v) { s.startTime = std::min(v, s.endTime - kShortestClip); }, -1e3, 1e3, 0.1, 3, tr(" s"));
+  f.addDouble(tr("Clip end"), [](const Scene& s) { return s.endTime; },
+              [](Scene& s, double v) { s.endTime = std::max(v, s.startTime + kShortestClip); }, -1e3, 1e3, 0.1, 3, tr(" s"));
+  f.addVector(tr("Gravity"), [](const Scene& s) { return s.gravity; },
+              [](Scene& s, const Eigen::Vector3d& v) { s.gravity = v; }, -100, 100, 0.1, 3);
+  f.addBool(tr("Ground"), [](const Scene& s) { return s.groundEnabled; }, [](Scene& s, bool v) { s.groundEnabled = v; });
+  f.addDouble(tr("Ground height"), [](const Scene& s) { return s.groundHeight; },
+              [](Scene& s, double v) { s.groundHeight = v; }, -1e3, 1e3, 0.01, 3, tr(" m"));
+  f.addBool(tr("Bodies above the ground"), [](const Scene& s) { return s.solver.bodiesAboveGround; },
+            [](Scene& s, bool v) { s.solver.bodiesAboveGround = v; });
+  f.addDouble(tr("Effort weight"), [](const Scene& s) { return s.objective.effort; },
+              [](Scene& s, double v) { s.objective.effort = v; }, 0, 1e6, 0.1, 4);
+  f.addDouble(tr("Power weight"), [](const Scene& s) { return s.objective.power; },
+              [](Scene& s, double v) { s.objective.power = v; }, 0, 1e6, 0.1, 4);
+  f.addDouble(tr("Smoothness weight"), [](const Scene& s) { return s.objective.smoothness; },
+              [](Scene& s, double v) { s.objective.smoothness = v; }, 0, 1e6, 1e-4, 6);
+  f.addChoice(tr("Smooth in"), {tr("acceleration"), tr("jerk")},
+              [](const Scene& s) { return s.objective.smoothnessOrder - 2; },
+              [](Scene& s, int v) { s.objective.smoothnessOrder = v + 2; });
+  // Where the solve starts: it refines the transcription by itself when the motion needs it.
+  f.addDouble(tr("Control points per second"), [](const Scene& s) { return s.transcription.controlPointsPerSecond; },
+              [](Scene& s, double v) { s.transcription.controlPointsPerSecond = v; }, 1, 200, 5, 1);
+  QStringList samples;
+  for (int k = 1; k <= TranscriptionSpec::kMaxSamplesPerSegment; ++k) samples << QString::number(k);
+  f.addChoice(tr("Samples per segment"), samples, [](const Scene& s) { return s.transcription.samplesPerSegment - 1; },
+              [](Scene& s, int v) { s.transcription.samplesPerSegment = v + 1; });
+  f.addDouble(tr("Solver tolerance"), [](const Scene& s) { return s.solver.tolerance; },
+              [](Scene& s, double v) { s.solver.tolerance = v; }, 1e-10, 1e-2, 1e-7, 10);
+  f.addDouble(tr("Most multiplier updates"), [](const Scene& s) { return double(s.solver.maxOuterIterations); },
+              [](Scene& s, double v) { s.solver.maxOuterIterations = static_cast<int>(v); }, 1, 1000, 10, 0);
+  f.refresh();
+  connect(doc_, &Document::sceneChanged, form_, &PropertyForm::refresh);
+}
+
+}  // namespace spacetime::ui
