@@ -20,8 +20,8 @@ echo
 python3 - "$tmp/solve.json" <<'PY'
 import json, sys
 rows = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("aggregate_name") == "median"]
-print("| benchmark | median | LM iterations + Newton steps | converged |")
-print("|---|---|---|---|")
+print("| benchmark | median | LM iterations + Newton steps | ms per LM iteration (evaluation, linear solver) | ms per Newton step (Hessian, factorisation, line search) | converged |")
+print("|---|---|---|---|---|---|")
 for b in rows:
     name = b["run_name"].replace("BM_", "").replace("/iterations:1", "").replace("/real_time", "")
     t = b["real_time"]
@@ -33,8 +33,15 @@ for b in rows:
         steps = f"{b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}"
     elif "rows" in b:
         steps = f"{b['rows']:.0f} rows x {b['cols']:.0f} columns"
-    conv = {1: "yes", 0: "no"}.get(b.get("converged"), "")
-    print(f"| {name} | {when} | {steps} | {conv} |")
+    conv = {1: "yes", 0: "no"}.get(b.get("converged", b.get("valid")), "")
+    lm = newton = ""
+    if b.get("lm_ms_per_iteration"):
+        lm = f"{b['lm_ms_per_iteration']:.2f} ({100 * b['lm_evaluation_share']:.0f} %, {100 * b['lm_linear_solver_share']:.0f} %)"
+    if b.get("newton_ms_per_step"):
+        newton = f"{b['newton_ms_per_step']:.1f} ({b['newton_hessian_ms']:.1f}, {b['newton_factorisation_ms']:.1f}, {b['newton_line_search_ms']:.1f})"
+    if "transcriptions" in b:
+        steps += f", {b['transcriptions']:.0f} transcription(s)"
+    print(f"| {name} | {when} | {steps} | {lm} | {newton} | {conv} |")
 PY
 echo
 echo "## Expression tape vs native RNEA (expr_benchmark, medians of 5)"

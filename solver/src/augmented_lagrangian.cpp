@@ -239,6 +239,11 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     const PolishResult result = polishNewton(problem, po, cancel);
     summary.newtonSteps += result.iterations;
     summary.jacobianSeconds += result.jacobianSeconds;
+    summary.polishSeconds += result.seconds;
+    summary.polishEvaluationSeconds += result.jacobianSeconds;
+    summary.hessianSeconds += result.hessianSeconds;
+    summary.factorisationSeconds += result.factorisationSeconds;
+    summary.lineSearchSeconds += result.lineSearchSeconds;
     if (!result.converged) return false;
     m = measure(problem);
     summary.status = SolveStatus::Converged;

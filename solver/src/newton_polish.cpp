@@ -321,6 +321,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
 
     // W = J_r^T J_r + curvature of the objective rows (weights r) and of the held constraints
     // (weights y), the Hessian of the Lagrangian 1/2 |r|^2 + y.c_A.
+    Clock::time_point phase = Clock::now();
     Vec w = Vec::Zero(rowCount);
     for (size_t i = 0; i < objective.size(); ++i) w[objective[i]] = r[static_cast<Eigen::Index>(i)];
     for (int i = 0; i < m; ++i) w[constraint[i]] = y[i];
@@ -329,6 +330,8 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     for (int k = 0; k < G.outerSize(); ++k)
       for (SpMat::InnerIterator e(G, k); e; ++e)
         if (e.row() >= e.col()) t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    result.hessianSeconds += secondsSince(phase);
+    phase = Clock::now();
     for (int k = 0; k < A.outerSize(); ++k)
       for (SpRow::InnerIterator e(A, k); e; ++e) t.emplace_back(n + static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
     for (int i = 0; i < m; ++i) t.emplace_back(n + i, n + i, -dc);
@@ -360,7 +363,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     // the right-hand side on luxo_jump); three steps of iterative refinement restore them.
     Vec d = ldlt.solve(rhs);
     for (int refine = 0; refine < 3; ++refine) d += ldlt.solve(Vec(rhs - K.selfadjointView<Eigen::Lower>() * d));
+    result.factorisationSeconds += secondsSince(phase);
     if (!d.allFinite()) return giveUp("the Newton step is not finite");
+    phase = Clock::now();
 
     // Full Newton steps near a KKT point; halve while the step makes the violation or the KKT
     // residual worse (the polish is local: a step that keeps failing means the active set or the
@@ -384,6 +389,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       if (accepted)
         for (int i = 0; i < m; ++i) multipliers[constraint[i]] = yTrial[i];
     }
+    result.lineSearchSeconds += secondsSince(phase);
     if (!accepted) return giveUp("a Newton step did not reduce the KKT residual");
     x = vars.save();
     rows = std::move(trial);

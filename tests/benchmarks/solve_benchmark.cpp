@@ -1,6 +1,7 @@
 // Solve time of every shipped scene (and of the lamp rooted at its head, tests/scenes/) from its
-// default initial guess, and the time of one full residual + Jacobian evaluation of the Luxo
-// jump. Run a Release build:
+// default initial guess on 1 and 2 threads, the jump ladder's valid rungs as spacetime-cli solves
+// them, warm re-solves after an edit, and the time of one full residual + Jacobian evaluation of
+// the Luxo jump. Each solve reports its iterations and the time per step by phase (reportSteps). Run a Release build:
 //   ./build/tests/benchmarks/solve_benchmark --benchmark_repetitions=3
 //     --benchmark_report_aggregates_only=true
 // and read the *_median rows.
@@ -12,9 +13,31 @@
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
+#include "solver/refinement.h"
 
 namespace spacetime {
 namespace {
+
+// Iterations and where a solve's time went, per step: the augmented Lagrangian's
+// Levenberg-Marquardt iterations (Ceres: residual and Jacobian evaluation, the linear solver)
+// and the Newton polish's steps (the Hessian, the factorisation with its inertia correction,
+// the line search's trial points).
+void reportSteps(benchmark::State& state, const SolverSummary& s) {
+  state.counters["lm_iterations"] = s.iterations;
+  state.counters["newton_steps"] = s.newtonSteps;
+  const double lmSeconds = s.solveSeconds - s.polishSeconds;
+  if (s.iterations > 0) {
+    state.counters["lm_ms_per_iteration"] = 1e3 * lmSeconds / s.iterations;
+    state.counters["lm_evaluation_share"] = lmSeconds > 0 ? (s.jacobianSeconds - s.polishEvaluationSeconds) / lmSeconds : 0;
+    state.counters["lm_linear_solver_share"] = lmSeconds > 0 ? s.linearSolverSeconds / lmSeconds : 0;
+  }
+  if (s.newtonSteps > 0) {
+    state.counters["newton_ms_per_step"] = 1e3 * s.polishSeconds / s.newtonSteps;
+    state.counters["newton_hessian_ms"] = 1e3 * s.hessianSeconds / s.newtonSteps;
+    state.counters["newton_factorisation_ms"] = 1e3 * s.factorisationSeconds / s.newtonSteps;
+    state.counters["newton_line_search_ms"] = 1e3 * s.lineSearchSeconds / s.newtonSteps;
+  }
+}
 
 // With samplesPerSegment > 0 the scene's transcription is overridden (2: a coarser transcription,
 // which converges but fails the dense-grid check); polish = false runs the augmented Lagrangian
@@ -27,7 +50,7 @@ void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSe
   if (samplesPerSegment > 0) scene.transcription.samplesPerSegment = samplesPerSegment;
   bool converged = true;
   double violation = 0;
-  int iterations = 0, newtonSteps = 0;
+  SolverSummary last;
   for (auto _ : state) {
     state.PauseTiming();
     std::string error;
@@ -37,16 +60,13 @@ void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSe
     options.maxSeconds = 120;
     options.newtonPolish = polish;
     options.threads = threads;
-    const SolverSummary s = solveSpacetime(*problem, options);
-    converged = converged && s.converged;
-    violation = std::max(violation, s.maxViolation);
-    iterations = s.iterations;
-    newtonSteps = s.newtonSteps;
+    last = solveSpacetime(*problem, options);
+    converged = converged && last.converged;
+    violation = std::max(violation, last.maxViolation);
   }
   state.counters["converged"] = converged ? 1 : 0;
   state.counters["max_violation"] = violation;
-  state.counters["lm_iterations"] = iterations;
-  state.counters["newton_steps"] = newtonSteps;
+  reportSteps(state, last);
 }
 
 // What the editor does while an animator drags: luxo_jump solved, then its end pose moved 2 cm
@@ -65,8 +85,7 @@ void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02
       for (auto& [dof, value] : t.values)
         if (dof == "base_x") value += move;
   bool converged = true;
-  int iterations = 0, newtonSteps = 0;
-  double objective = 0;
+  SolverSummary last;
   for (auto _ : state) {
     state.PauseTiming();
     auto moved = SpacetimeProblem::build(scene, &error);
@@ -74,16 +93,35 @@ void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02
     state.ResumeTiming();
     SolverOptions warm = options;
     warm.warmStart = restored;
-    const SolverSummary s = solveSpacetime(*moved, warm);
-    converged = converged && restored && s.converged;
-    iterations = s.iterations;
-    newtonSteps = s.newtonSteps;
-    objective = s.objective;
+    last = solveSpacetime(*moved, warm);
+    converged = converged && restored && last.converged;
   }
   state.counters["converged"] = converged ? 1 : 0;
-  state.counters["lm_iterations"] = iterations;
-  state.counters["newton_steps"] = newtonSteps;
-  state.counters["objective"] = objective;
+  state.counters["objective"] = last.objective;
+  reportSteps(state, last);
+}
+
+// A rung of the jump ladder (tests/scenes/ladder/) solved as spacetime-cli solves it: 2 threads,
+// refining the transcription until the motion passes the validity report.
+void BM_Ladder(benchmark::State& state, const std::string& name) {
+  const Scene scene = testing::testScene("ladder/" + name);
+  bool valid = true;
+  RefinedSolve last;
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::string error;
+    auto problem = SpacetimeProblem::build(scene, &error);
+    state.ResumeTiming();
+    SolverOptions options = solverOptionsFor(scene.solver);
+    options.threads = 2;
+    options.maxSeconds = 120;
+    last = solveRefined(std::move(problem), options, RefinementOptions());
+    valid = valid && last.valid;
+  }
+  state.counters["valid"] = valid ? 1 : 0;
+  state.counters["transcriptions"] = static_cast<double>(last.attempts.size());
+  state.counters["objective"] = last.summary.objective;
+  reportSteps(state, last.summary);
 }
 
 // One full residual + Jacobian evaluation of the jump; with `freeLiftOff`, the take-off's end is
@@ -122,6 +160,18 @@ BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm, true)->Unit(benchmark::kMil
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_without_polish, false)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm, true, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_without_polish, false, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+// Two threads, as spacetime-cli solves (the single-threaded rows above are the editor's).
+BENCHMARK_CAPTURE(BM_Solve, luxo_hurdle_2_threads, std::string("luxo_hurdle.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_3d_2_threads, std::string("luxo_3d.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_power_formula_2_threads, std::string("luxo_power_formula.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_heavy_2_threads, std::string("luxo_heavy.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+// The ladder's rungs that end valid (the longer ones stall for about a minute: scripts/measure.sh
+// runs them through the CLI).
+BENCHMARK_CAPTURE(BM_Ladder, jump_0_3m, std::string("luxo_jump_0.3m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Ladder, jump_0_6m, std::string("luxo_jump_0.6m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Ladder, jump_0_9m, std::string("luxo_jump_0.9m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Ladder, jump_1_2m, std::string("luxo_jump_1.2m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Ladder, hurdle_double, std::string("luxo_hurdle_double.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, fixed_lift_off, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, free_lift_off, true)->Unit(benchmark::kMillisecond);
 

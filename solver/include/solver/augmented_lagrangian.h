@@ -112,6 +112,12 @@ struct SolverSummary {
   double solveSeconds = 0;
   double jacobianSeconds = 0;   // Ceres's time in residual and Jacobian evaluation
   double linearSolverSeconds = 0;
+  // The Newton polish's time (included in the above where it evaluates rows) split by phase.
+  double polishSeconds = 0;
+  double polishEvaluationSeconds = 0;  // its rows and Jacobians (also in jacobianSeconds)
+  double hessianSeconds = 0;
+  double factorisationSeconds = 0;
+  double lineSearchSeconds = 0;
 };
 
 // Called after inner iterations, at most every 100 ms (from the solving thread). Return false

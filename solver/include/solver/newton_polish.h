@@ -55,7 +55,10 @@ struct PolishResult {
   double maxViolation = 0;
   std::string reason;      // why it stopped
   double seconds = 0;
-  double jacobianSeconds = 0;
+  double jacobianSeconds = 0;       // rows and Jacobians, at the start and at every trial point
+  double hessianSeconds = 0;        // the weighted curvature of the rows and J_r^T J_r
+  double factorisationSeconds = 0;  // K assembled, LDL^T (with inertia correction), solves
+  double lineSearchSeconds = 0;     // the trial points, their evaluations included
 };
 
 // Polishes the problem's current variables with the multiplier estimates of its
