@@ -104,6 +104,7 @@ std::string SolverOptions::validate() const {
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
   if (!(polishBelow > 0)) return "polishBelow must be > 0";
   if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
+  if (coldNewtonSteps < 0) return "coldNewtonSteps must not be negative";
   if (stallUpdates < 1) return "stallUpdates must be at least 1";
   return "";
 }
@@ -230,10 +231,10 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // It stops at the solve's own time limit.
   int polishAttempts = 0;
   double lastPolishViolation = 1e300;
-  auto polish = [&] {
+  auto polish = [&](int maxIterations) {
     PolishOptions po;
     po.tolerance = options.tolerance;
-    po.maxIterations = options.maxPolishIterations;
+    po.maxIterations = maxIterations;
     po.threads = options.threads;
     po.deadline = deadline;
     const PolishResult result = polishNewton(problem, po, cancel);
@@ -270,14 +271,21 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // old one's multipliers and active set: Newton steps go straight there, where the augmented
   // Lagrangian at the old, large penalty would crawl (luxo_jump with its end pose moved 2 cm:
   // 606 LM iterations). If they fail, the outer loop starts as it would have.
-  const bool polishedWarm = options.newtonPolish && options.warmStart && !freeEndsHeld && polish();
+  const bool polishedWarm = options.newtonPolish && options.warmStart && !freeEndsHeld && polish(options.maxPolishIterations);
+  // A cold start tries a few Newton steps first as well: where the task is a quadratic program
+  // (the particle scenes: linear dynamics, quadratic effort, point constraints) the first step
+  // lands on the optimum. Elsewhere they fail at once and restore the default guess (the jump:
+  // one rejected step).
+  const bool polishedCold = options.newtonPolish && !options.warmStart && !freeEndsHeld &&
+                            options.coldNewtonSteps > 0 && polish(options.coldNewtonSteps);
+  const bool polishedFirst = polishedWarm || polishedCold;
   // A warm start far from feasible (a large edit the Newton steps could not finish) keeps its
   // multipliers but restarts the penalty (at warmRestartPenalty): the old one was grown for a
   // violation near zero, and at 1e7 the inner problems are stiff (luxo_jump, end pose moved 10 cm:
   // 844 LM iterations, 14.8 s with the old penalty; 360, 5.4 s restarted at 100; 240 at 1e4).
   if (!polishedWarm && options.warmStart && m.maxViolation > options.polishBelow)
     al.rho = std::min(al.rho, std::min(options.warmRestartPenalty, options.maxPenalty));
-  for (int outer = 0; !polishedWarm && outer < options.maxOuterIterations; ++outer) {
+  for (int outer = 0; !polishedFirst && outer < options.maxOuterIterations; ++outer) {
     forwarder.outer = outer;
     forwarder.rho = al.rho;
     ceres::Solver::Summary cs;
@@ -328,7 +336,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
         m.maxViolation <= options.polishBelow && m.maxViolation <= 0.1 * lastPolishViolation) {
       ++polishAttempts;
       lastPolishViolation = m.maxViolation;
-      if (polish()) break;
+      if (polish(options.maxPolishIterations)) break;
     }
     // First-order multiplier update (Nocedal & Wright eq. 17.39; 17.67 for inequalities).
     for (size_t k = 0; k < rows.size(); ++k) {

@@ -65,6 +65,9 @@ struct SolverOptions {
   // lamp's head touches down at the landing, and a 2 cm warm edit of the jump needed 17 steps.
   int maxPolishIterations = 40;
   int maxPolishAttempts = 2;  // the second after the violation dropped tenfold
+  // Newton steps tried from a cold start before the augmented Lagrangian (0: none). A quadratic
+  // program (the particle scenes) is solved by the first; a failed attempt restores the guess.
+  int coldNewtonSteps = 1;
   // Constraints that cannot all hold (two pins at one instant in two places, a contact held over
   // the whole clip under a jump's end pose) stall the violation while the penalty sits at its
   // cap. The solve stops as Stalled after stallUpdates such multiplier updates in which the
