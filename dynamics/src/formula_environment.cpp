@@ -1,6 +1,8 @@
 // Symbolic names for formulas (see formula_environment.h).
 #include "dynamics/formula_environment.h"
 
+#include <algorithm>
+
 #include "dynamics/algorithms.h"
 
 namespace spacetime {
@@ -96,6 +98,16 @@ std::optional<std::array<Expr, 3>> CharacterFormulaEnvironment::bodyFunction(
   }
   const Eigen::Vector3d p = point ? Eigen::Vector3d((*point)[0], (*point)[1], (*point)[2])
                                   : Eigen::Vector3d::Zero();
+  if (function == "force" && contactBodies_ &&
+      std::find(contactBodies_->begin(), contactBodies_->end(), b) == contactBodies_->end()) {
+    std::string list;
+    for (int k : *contactBodies_)
+      if (list.find("'" + model_.bodies[k].name + "'") == std::string::npos)
+        list += (list.empty() ? "" : ", ") + ("'" + model_.bodies[k].name + "'");
+    *error = "no contact touches body '" + body + "', so force(" + body + ") is zero at every instant; " +
+             (list.empty() ? model_.name + " has no contacts" : "bodies with contacts: " + list);
+    return std::nullopt;
+  }
   if (function == "force") {
     std::array<Expr, 3> sum{Expr(0.0), Expr(0.0), Expr(0.0)};
     for (const PointForce<Expr>& pf : contactForces())

@@ -36,9 +36,12 @@ FormulaSeries evaluateFormulaSeries(const Scene& scene, const CharacterAnimation
   }
   expr::Graph g;
   CharacterFormulaEnvironment env(model, g, contacts, forceDims);
+  std::vector<int> touched;  // the tracks are every contact of the character
+  for (const ContactPoints& p : contacts) touched.push_back(p.body);
+  env.setContactBodies(std::move(touched));
   const expr::FormulaResult parsed = expr::parseFormula(expression, g, env);
   if (!parsed.value) {
-    out.error = "column " + std::to_string(parsed.column) + ": " + parsed.error;
+    out.error = parsed.error;  // "column N: ..."
     return out;
   }
   const expr::Tape tape = expr::Tape::compile(g, {*parsed.value}, true);

@@ -557,8 +557,8 @@ SPACETIME_DEFINE_EVALUATORS(JointSpeedLimitKernel)
 // --- FormulaKernel -----------------------------------------------------------------------
 
 FormulaKernel::FormulaKernel(std::shared_ptr<const expr::Tape> tape, int inputs, double time,
-                             RowKind kind, double scale, double offset, std::string label)
-    : tape_(std::move(tape)), time_(time), scale_(scale), offset_(offset) {
+                             RowKind kind, double scale, double offset, std::string label, std::string source)
+    : tape_(std::move(tape)), time_(time), scale_(scale), offset_(offset), source_(std::move(source)) {
   label_ = std::move(label);
   inputs_ = inputs;
   kinds_.assign(1, kind);

@@ -770,6 +770,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
   }
   if (!addFormulaTerms(error)) return false;
   fixHeldVelocities();
+  if (!checkFormulasFinite(error)) return false;
   for (const FreeEnd& e : freeEnds_) {
     double* T = x_.data() + e.offset;
     if (!problem_->HasParameterBlock(T)) continue;
@@ -864,12 +865,18 @@ std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std
   for (int j : active) points.push_back(contacts_[j].points);
   expr::Graph g;
   CharacterFormulaEnvironment env(*characters_[c].model, g, points, characters_[c].forceDims);
+  std::vector<int> touched;
+  for (const ContactVariables& ct : contacts_)
+    if (ct.character == c) touched.push_back(ct.points.body);
+  env.setContactBodies(std::move(touched));
   const expr::FormulaResult r = expr::parseFormula(expression, g, env);
   if (!r.value) {
     *error = r.error;
     return nullptr;
   }
-  auto tape = std::make_shared<const expr::Tape>(expr::Tape::compile(g, {*r.value}, true));
+  // One slot per instruction: a formula that is not finite is traced to the operation where
+  // its NaN or infinity is born (checkFormulasFinite). Formulas are short; the slots cost nothing.
+  auto tape = std::make_shared<const expr::Tape>(expr::Tape::compile(g, {*r.value}, false));
   formulaTapes_.emplace(key, tape);
   return tape;
 }
@@ -877,13 +884,13 @@ std::shared_ptr<const expr::Tape> SpacetimeProblem::formulaTape(int c, const std
 bool SpacetimeProblem::addFormulaTerms(std::string* error) {
   // A formula at a sample reads the sample's inputs: q, qd, qdd and the active contacts' forces.
   auto addFormula = [&](int c, double time, const std::string& expression, RowKind kind, double scale,
-                        double value, const std::string& label, std::string* why) {
+                        double value, const std::string& label, const std::string& source, std::string* why) {
     const SampleInputs si = sampleInputs(c, time);
     auto tape = formulaTape(c, si.active, expression, why);
     if (!tape) return false;
     int inputs = 3 * characters_[c].dofs;
     for (int j : si.active) inputs += contacts_[j].blockSize();
-    addResidualAt(std::make_shared<FormulaKernel>(tape, inputs, time, kind, scale, value, label),
+    addResidualAt(std::make_shared<FormulaKernel>(tape, inputs, time, kind, scale, value, label, source),
                   si.ref.event, [this, si, kind](InputMap& in, double T) {
                     addSampleInputs(in, si, T);
                     if (kind == RowKind::Objective) setQuadratureScale(in, si.ref, T);
@@ -902,8 +909,9 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
       std::string why;
       const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
       const double scale = t.relation == '>' ? -1.0 : 1.0;
-      if (!addFormula(c, time, t.expression, kind, scale, t.value, at(label, time), &why)) {
-        *error = "term '" + t.id + "': formula \"" + t.expression + "\": " + why;
+      const std::string source = "term '" + t.id + "': formula \"" + t.expression + "\"";
+      if (!addFormula(c, time, t.expression, kind, scale, t.value, at(label, time), source, &why)) {
+        *error = source + ": " + why;
         return false;
       }
     }
@@ -913,12 +921,48 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
     for (const Sample& s : transcription_.samples) {
       if (s.weight <= 0 || f.weight <= 0 || !s.appliesTo(f.character)) continue;
       std::string why;
+      const std::string source = "objective formula \"" + f.expression + "\"";
       if (!addFormula(c, s.time, f.expression, RowKind::Objective, std::sqrt(f.weight * s.weight), 0.0,
-                      at("objective formula", s.time), &why)) {
-        *error = "objective formula \"" + f.expression + "\": " + why;
+                      at("objective formula", s.time), source, &why)) {
+        *error = source + ": " + why;
         return false;
       }
     }
+  }
+  return true;
+}
+
+namespace {
+// Why an operation's value is not finite though its operands are.
+std::string notFiniteBecause(expr::Op op) {
+  switch (op) {
+    case expr::Op::Div: return "a division by zero";
+    case expr::Op::Log: return "the logarithm of a number that is not positive";
+    case expr::Op::Sqrt: return "the square root of a negative number";
+    case expr::Op::Pow: return "a power with no real value (a negative base, or zero to a negative power)";
+    case expr::Op::Tan: return "the tangent of an odd multiple of pi/2";
+    case expr::Op::Exp: return "an exponential that overflows";
+    case expr::Op::Var: return "an input that is not finite";
+    default: return "a value that overflows";
+  }
+}
+}  // namespace
+
+// A formula that evaluates to NaN or infinity (x/0, log(-1)) would reach the solver as Ceres's
+// "evaluation failed", naming nothing: it is bad input, named with its term, its time and the
+// operation where the NaN or infinity is born, on the motion the solve starts from.
+bool SpacetimeProblem::checkFormulasFinite(std::string* error) const {
+  for (const TermResidual* r : residuals_) {
+    const auto* f = dynamic_cast<const FormulaKernel*>(&r->kernel());
+    if (!f) continue;
+    const Eigen::VectorXd z = r->inputsNow();
+    const std::optional<expr::Op> op = f->tape().firstNonFinite(z.data(), f->time());
+    if (!op) continue;
+    std::ostringstream why;
+    why << f->source() << " is not a finite number at t = " << f->time() << " s of the starting motion: "
+        << notFiniteBecause(*op);
+    *error = why.str();
+    return false;
   }
   return true;
 }

@@ -115,6 +115,13 @@ void TermResidual::rawRows(double const* const* parameters, double* rows) const 
   scaleObjective(m.scale, rows);
 }
 
+Eigen::VectorXd TermResidual::inputsNow() const {
+  const Map m = map(blocks_.data());
+  Eigen::VectorXd z(kernel_->inputSize());
+  matrix(m).apply(stacked(blocks_.data()).data(), z.data());
+  return z;
+}
+
 std::vector<double> TermResidual::rawRowsNow() const {
   std::vector<double> rows(kernel_->rowCount());
   rawRows(blocks_.data(), rows.data());

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <sstream>
 #include <tuple>
 
 #include "core/shape_mesh.h"
@@ -358,6 +359,18 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, c
         evaluateFormulaSeries(scene, sampleAnimationAt(problem, times).characters[c], term.expression);
     check.error = series.error;
     for (size_t k = 0; k < series.values.size(); ++k) {
+      // NaN compares false with everything: std::max(0.0, NaN) is 0, a pass. A value that is not
+      // a number fails the check, named.
+      if (!std::isfinite(series.values[k])) {
+        if (check.error.empty()) {
+          std::ostringstream why;
+          why << "not a finite number at t = " << times[k] << " s";
+          check.error = why.str();
+          check.worstTime = times[k];
+        }
+        check.maxViolation = 1e300;
+        continue;
+      }
       const double gap = series.values[k] - term.value;
       const double violation = term.relation == '<' ? std::max(0.0, gap)
                                : term.relation == '>' ? std::max(0.0, -gap)

@@ -92,6 +92,19 @@ Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseS
   return tape;
 }
 
+std::optional<Op> Tape::firstNonFinite(const double* v, double time) const {
+  checkReverse();
+  std::vector<double> w;
+  evaluateSlots(v, time, w);
+  for (const Instruction& in : code_) {
+    if (std::isfinite(w[in.dst])) continue;
+    const bool finiteA = !readsSlotA(in.op) || std::isfinite(w[in.a]);
+    const bool finiteB = !readsSlotB(in.op) || std::isfinite(w[in.b]);
+    if (finiteA && finiteB) return in.op;
+  }
+  return std::nullopt;
+}
+
 void Tape::checkReverse() const {
   if (reuse_) throw std::logic_error("expr::Tape: reverse mode needs a tape compiled without slot reuse");
 }

@@ -31,6 +31,10 @@ class CharacterFormulaEnvironment : public expr::FormulaEnvironment {
   bool isBodyFunction(const std::string& name) const override;
 
   int variableCount() const;
+  // The bodies any contact of the character touches over the whole clip (the contacts above are
+  // only those active at one instant). Once set, force(<body>) of another body is an error: it
+  // would be zero at every instant, which is never what a formula means.
+  void setContactBodies(std::vector<int> bodies) { contactBodies_ = std::move(bodies); }
 
  private:
   void ensureKinematics();
@@ -45,6 +49,7 @@ class CharacterFormulaEnvironment : public expr::FormulaEnvironment {
   std::unique_ptr<Data<expr::Expr>> kinematics_;  // FK with q, qd, qdd
   VecX<expr::Expr> tau_;
   bool haveTau_ = false;
+  std::optional<std::vector<int>> contactBodies_;
 };
 
 }  // namespace spacetime

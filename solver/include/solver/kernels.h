@@ -299,13 +299,18 @@ class JointSpeedLimitKernel : public Kernel {
 // the dynamics kernel's (q, qd, qdd, then the active contacts' forces).
 class FormulaKernel : public Kernel {
  public:
+  // `source` names the formula in messages: "term 'id': formula \"...\"".
   FormulaKernel(std::shared_ptr<const expr::Tape> tape, int inputs, double time, RowKind kind,
-                double scale, double offset, std::string label);
+                double scale, double offset, std::string label, std::string source);
   SPACETIME_KERNEL_EVALUATORS
+  const expr::Tape& tape() const { return *tape_; }
+  double time() const { return time_; }
+  const std::string& source() const { return source_; }
 
  private:
   std::shared_ptr<const expr::Tape> tape_;
   double time_, scale_, offset_;
+  std::string source_;
 };
 
 }  // namespace spacetime

@@ -357,6 +357,7 @@ class SpacetimeProblem {
   std::shared_ptr<const expr::Tape> formulaTape(int character, const std::vector<int>& active,
                                                 const std::string& expression, std::string* error);
   bool addFormulaTerms(std::string* error);
+  bool checkFormulasFinite(std::string* error) const;  // after the initial guess
 
   Scene scene_;
   Transcription transcription_;

@@ -107,6 +107,8 @@ class TermResidual : public ceres::CostFunction {
   void rawRows(double const* const* parameters, double* rows) const;
   // The same at the parameters' current values.
   std::vector<double> rawRowsNow() const;
+  // The kernel's inputs z = B p at the parameters' current values.
+  Eigen::VectorXd inputsNow() const;
   // B^T H_z B at the parameters' current values: the Hessian, in the stacked parameter blocks,
   // of sum_r w[r] raw row r (Kernel::weightedHessian). Not for moving residuals.
   Eigen::MatrixXd weightedHessianNow(const double* w) const;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cmath>
+#include <optional>
 #include <type_traits>
 #include <vector>
 
@@ -64,6 +65,11 @@ class Tape {
   // Hessian of output `output` times `direction` (forward-over-reverse).
   void hessianVectorProduct(const double* variables, double time, std::size_t output,
                             const double* direction, double* product, std::size_t count) const;
+
+  // Where a NaN or an infinity is born: the operation of the first instruction whose value is
+  // not finite though its operands are (nullopt if every value is finite). Needs a tape compiled
+  // without slot reuse, which keeps every intermediate value.
+  std::optional<Op> firstNonFinite(const double* variables, double time) const;
 
   // The sorted variable indices each output depends on (its Jacobian's sparsity pattern).
   std::vector<std::vector<std::uint32_t>> sparsity() const;
