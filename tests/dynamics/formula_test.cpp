@@ -94,6 +94,11 @@ TEST(Formula, BadFormulasNameTheColumnAndWhatWasExpected) {
       {"pos(head, [1, 2]).y", 16, "expected ','"},
       {"q.j1.x", 6, "needs a vector"},
       {"pow(q.j1)", 9, "expected ','"},
+      // Non-ASCII: the whole character in the message (valid UTF-8), columns in characters.
+      {"q.j1 \u00d7 2", 6, "unexpected '\u00d7'"},
+      {"\u03c0 * 2", 1, "unexpected '\u03c0'"},
+      {"\"\u00e9\" + \u00e9", 1, "unexpected '\"'"},
+      {"q.j1 + 1 \xff", 10, "unexpected '\\xFF'"},
   };
   for (const Bad& b : cases) {
     const expr::FormulaResult r = expr::parseFormula(b.text, g, env);

@@ -2,6 +2,7 @@
 #include "core/expr/formula.h"
 
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 
 namespace spacetime::expr {
@@ -12,6 +13,28 @@ struct ParseError {
   std::string message;
 };
 
+// The character that starts at byte `at`, whole: a UTF-8 sequence as it is (a message must stay
+// valid UTF-8, and "×" is three bytes), a byte that starts none as \xNN.
+std::string characterAt(const std::string& s, size_t at) {
+  const auto byte = [&](size_t i) { return static_cast<unsigned char>(s[i]); };
+  const unsigned char lead = byte(at);
+  const size_t length = lead < 0x80 ? 1 : (lead >> 5) == 0x6 ? 2 : (lead >> 4) == 0xE ? 3 : (lead >> 3) == 0x1E ? 4 : 0;
+  bool whole = length > 0 && at + length <= s.size();
+  for (size_t i = 1; whole && i < length; ++i) whole = (byte(at + i) >> 6) == 0x2;
+  if (whole) return s.substr(at, length);
+  char hex[8];
+  std::snprintf(hex, sizeof hex, "\\x%02X", lead);
+  return hex;
+}
+
+// Columns count characters, not bytes: the column of byte `at` of UTF-8 text.
+int columnOf(const std::string& s, size_t at) {
+  int column = 1;
+  for (size_t i = 0; i < at && i < s.size(); ++i)
+    if ((static_cast<unsigned char>(s[i]) >> 6) != 0x2) ++column;
+  return column;
+}
+
 class Parser {
  public:
   Parser(const std::string& text, Graph& g, FormulaEnvironment& env) : s_(text), g_(g), env_(env) {}
@@ -20,7 +43,7 @@ class Parser {
     FormulaValue v = sum();
     skip();
     if (pos_ < s_.size())
-      fail(pos_, std::string("unexpected '") + s_[pos_] + "'; expected an operator or the end");
+      fail(pos_, "unexpected '" + characterAt(s_, pos_) + "'; expected an operator or the end");
     if (v.isVector) fail(0, "the formula is a vector; pick a component such as .x, .y or .z");
     return v.scalar;
   }
@@ -146,7 +169,7 @@ class Parser {
       return v;
     }
     if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_')
-      fail(pos_, std::string("unexpected '") + c + "'; expected a number, a name or '('");
+      fail(pos_, "unexpected '" + characterAt(s_, pos_) + "'; expected a number, a name or '('");
     const size_t at = pos_;
     const std::string n = name();
     if (accept('(')) return call(n, at);
@@ -226,7 +249,7 @@ FormulaResult parseFormula(const std::string& text, Graph& g, FormulaEnvironment
     Expr e = Parser(text, g, env).parse();
     r.value = e.graph ? e : g.constant(e.constant);
   } catch (const ParseError& e) {
-    r.column = static_cast<int>(e.position) + 1;
+    r.column = columnOf(text, e.position);
     r.error = "column " + std::to_string(r.column) + ": " + e.message;
   }
   return r;
