@@ -447,6 +447,44 @@ class EditorTest : public QObject {
     QCOMPARE(key.values.size(), doc.scene().characters[0].dofNames().size());
   }
 
+  // Blender-like keys: Ctrl+Z in a focused number field undoes the scene edit (not the field's
+  // text), Ctrl+Y and Ctrl+Shift+Z redo it, Shift+Left and Shift+Right go to the clip's start
+  // and end, Ctrl+Shift+S is Save As.
+  void undoKeysInAFocusedFieldUndoTheScene() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1280, 800)));
+    Document& doc = *w.document();
+    w.setAutoSolve(false);
+    doc.selectBody(0, doc.scene().characters[0].bodies[1].id);
+    auto* mass = qobject_cast<QDoubleSpinBox*>(w.builder()->form()->editor("Mass"));
+    QVERIFY(mass);
+    const double before = *doc.scene().characters[0].bodies[1].mass;
+    mass->setValue(before + 0.5);
+    QCOMPARE(*doc.scene().characters[0].bodies[1].mass, before + 0.5);
+    w.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    mass->setFocus();
+    QTRY_VERIFY(mass->hasFocus());
+    QTest::keyClick(mass, Qt::Key_Z, Qt::ControlModifier);
+    QCOMPARE(*doc.scene().characters[0].bodies[1].mass, before);
+    QCOMPARE(mass->value(), before);  // the field shows the scene's value again
+    QTest::keyClick(mass, Qt::Key_Y, Qt::ControlModifier);
+    QCOMPARE(*doc.scene().characters[0].bodies[1].mass, before + 0.5);
+    QTest::keyClick(mass, Qt::Key_Z, Qt::ControlModifier);
+    QTest::keyClick(mass, Qt::Key_Z, Qt::ControlModifier | Qt::ShiftModifier);
+    QCOMPARE(*doc.scene().characters[0].bodies[1].mass, before + 0.5);
+
+    doc.setCurrentTime(0.4);
+    QTest::keyClick(&w, Qt::Key_Right, Qt::ShiftModifier);
+    QCOMPARE(doc.currentTime(), doc.scene().endTime);
+    QTest::keyClick(&w, Qt::Key_Left, Qt::ShiftModifier);
+    QCOMPARE(doc.currentTime(), doc.scene().startTime);
+    QAction* saveAs = nullptr;
+    for (QAction* a : w.findChildren<QAction*>())
+      if (a->text().startsWith("Save &As")) saveAs = a;
+    QVERIFY(saveAs && saveAs->shortcuts().contains(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S)));
+  }
+
   // File > New starts from a clean status: not the previous scene's solve result.
   void newSceneClearsThePreviousResult() {
     MainWindow w;

@@ -9,7 +9,10 @@
 #include <QFileInfo>
 #include <QJsonDocument>
 #include <QJsonObject>
+#include <QAbstractSpinBox>
+#include <QKeyEvent>
 #include <QLayout>
+#include <QLineEdit>
 #include <QLockFile>
 #include <QMenuBar>
 #include <QMessageBox>
@@ -131,9 +134,39 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   resize(settings.contains("window/geometry") ? size() : QSize(1500, 950));
   updateTitle();
   QTimer::singleShot(0, this, &MainWindow::offerRecovery);
+  qApp->installEventFilter(this);  // the undo keys in focused fields (eventFilter)
+}
+
+namespace {
+// `keys` with `more` appended, each once.
+QList<QKeySequence> withKeys(QList<QKeySequence> keys, const QList<QKeySequence>& more) {
+  for (const QKeySequence& k : more)
+    if (!keys.contains(k)) keys.append(k);
+  return keys;
+}
+}  // namespace
+
+// Ctrl+Z and the redo keys in a focused text or number field undo the scene, not the field's
+// text: an edit is committed as soon as it is made, so the field's own undo would only make its
+// text disagree with the scene. A text field's ShortcutOverride takes these keys before the
+// window's shortcuts; stopped here, unaccepted, the window's Undo and Redo run instead.
+bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
+  if (event->type() == QEvent::ShortcutOverride) {
+    auto* widget = qobject_cast<QWidget*>(watched);
+    const auto* key = static_cast<QKeyEvent*>(event);
+    const QKeySequence pressed(key->keyCombination());
+    const bool undoOrRedo = key->matches(QKeySequence::Undo) || key->matches(QKeySequence::Redo) ||
+                            pressed == QKeySequence(Qt::CTRL | Qt::Key_Y) ||
+                            pressed == QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z);
+    if (undoOrRedo && widget && isAncestorOf(widget) &&
+        (qobject_cast<QLineEdit*>(widget) || qobject_cast<QAbstractSpinBox*>(widget)))
+      return true;
+  }
+  return QMainWindow::eventFilter(watched, event);
 }
 
 MainWindow::~MainWindow() {
+  qApp->removeEventFilter(this);
   job_.cancel();
   // C++ destroys the members (the document, the job, the timers) before the QWidget base deletes
   // the child widgets, and those panels and this window's slots use the document. Left to that
@@ -203,7 +236,9 @@ void MainWindow::createActions() {
     QString error;
     if (!saveFile(doc_.filePath(), &error)) QMessageBox::warning(this, tr("Save"), error);
   });
-  action(file, tr("Save &As…"), QKeySequence::SaveAs, saveAs);
+  QAction* saveAsAction = action(file, tr("Save &As…"), QKeySequence::SaveAs, saveAs);
+  // Blender's and most editors' binding, whatever the platform theme maps SaveAs to.
+  saveAsAction->setShortcuts(withKeys(QKeySequence::keyBindings(QKeySequence::SaveAs), {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S)}));
   file->addSeparator();
   QMenu* exportMenu = file->addMenu(tr("&Export"));
   auto exportTo = [this](const QString& title, const QString& name, const QString& filter,
@@ -234,7 +269,8 @@ void MainWindow::createActions() {
   QAction* undo = doc_.undoStack()->createUndoAction(this, tr("&Undo"));
   undo->setShortcut(QKeySequence::Undo);
   QAction* redo = doc_.undoStack()->createRedoAction(this, tr("&Redo"));
-  redo->setShortcut(QKeySequence::Redo);
+  redo->setShortcuts(withKeys(QKeySequence::keyBindings(QKeySequence::Redo),
+                              {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)}));
   edit->addAction(undo);
   edit->addAction(redo);
   edit->addSeparator();
@@ -269,6 +305,8 @@ void MainWindow::createActions() {
   action(play, tr("Play / pause"), QKeySequence(Qt::Key_Space), [this] { timeline_->togglePlay(); });
   action(play, tr("Next frame"), QKeySequence(Qt::Key_Right), [this] { timeline_->step(1); });
   action(play, tr("Previous frame"), QKeySequence(Qt::Key_Left), [this] { timeline_->step(-1); });
+  action(play, tr("Go to the start"), QKeySequence(Qt::SHIFT | Qt::Key_Left), [this] { doc_.setCurrentTime(doc_.scene().startTime); });
+  action(play, tr("Go to the end"), QKeySequence(Qt::SHIFT | Qt::Key_Right), [this] { doc_.setCurrentTime(doc_.scene().endTime); });
 
   QMenu* solveMenu = menuBar()->addMenu(tr("&Solve"));
   solveAction_ = action(solveMenu, tr("&Solve"), QKeySequence(Qt::Key_F5), [this] { solve(); });
