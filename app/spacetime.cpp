@@ -3,10 +3,12 @@
 //   spacetime [SCENE.json]                       opens the editor (default: the Luxo jump)
 //   spacetime --screenshot FILE [SCENE.json]     solves, renders the window to FILE, exits
 //             [--size WxH] [--time T]            window size; the time shown (default: mid-clip)
+//             [--panel NAME]                     a tabbed panel to bring to the front (e.g. Scene)
 //
 // A scene without a stored solution is solved as soon as it opens, and the motion refines
 // on screen while the solver runs.
 #include <QApplication>
+#include <QDockWidget>
 #include <QCommandLineParser>
 #include <QMessageBox>
 #include <QThread>
@@ -27,7 +29,8 @@ int main(int argc, char** argv) {
   QCommandLineOption screenshot("screenshot", "Solve, render the window to FILE (PNG) and exit.", "FILE");
   QCommandLineOption size("size", "Window size for --screenshot, e.g. 1600x1000.", "WxH", "1600x1000");
   QCommandLineOption time("time", "Time shown in the screenshot (default: the middle of the clip).", "T");
-  parser.addOptions({screenshot, size, time});
+  QCommandLineOption panel("panel", "Panel brought to the front for --screenshot (its title, e.g. Scene or Validity).", "NAME");
+  parser.addOptions({screenshot, size, time, panel});
   parser.addPositionalArgument("scene", "Scene file to open (default: the Luxo jump example).", "[SCENE.json]");
   parser.process(app);
   const QString scenePath = parser.positionalArguments().value(0, ":/scenes/luxo_jump.json");
@@ -57,6 +60,17 @@ int main(int argc, char** argv) {
   window.document()->setCurrentTime(parser.isSet(time) ? parser.value(time).toDouble() : 0.5 * (s.startTime + s.endTime));
   window.document()->selectBody(0, s.characters.empty() || s.characters[0].bodies.size() < 2 ? std::string() : s.characters[0].bodies.back().id);
   window.viewport()->frameAll();
+  if (parser.isSet(panel)) {
+    QDockWidget* shown = nullptr;
+    for (QDockWidget* d : window.findChildren<QDockWidget*>())
+      if (d->windowTitle().compare(parser.value(panel), Qt::CaseInsensitive) == 0) shown = d;
+    if (!shown) {
+      std::fprintf(stderr, "spacetime: no panel '%s'\n", qPrintable(parser.value(panel)));
+      return 2;
+    }
+    shown->show();
+    shown->raise();
+  }
   for (int i = 0; i < 20; ++i) {
     QApplication::processEvents();
     QThread::msleep(10);
