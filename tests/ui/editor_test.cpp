@@ -485,6 +485,37 @@ class EditorTest : public QObject {
     QVERIFY(saveAs && saveAs->shortcuts().contains(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S)));
   }
 
+  // A typed value below a field's smallest is refused with a message under the form and the
+  // field shows the scene's value again: -1 kg used to become +1 kg, and 0 was ignored silently.
+  void typedValuesBelowTheSmallestAreRefusedWithAMessage() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1280, 800)));
+    Document& doc = *w.document();
+    w.setAutoSolve(false);
+    doc.selectBody(0, doc.scene().characters[0].bodies[1].id);
+    PropertyForm* form = w.builder()->form();
+    auto* mass = qobject_cast<QDoubleSpinBox*>(form->editor("Mass"));
+    QVERIFY(mass);
+    const double before = *doc.scene().characters[0].bodies[1].mass;
+    const int commands = doc.undoStack()->count();
+    auto type = [&](const char* text) {
+      mass->setFocus();
+      mass->selectAll();
+      QTest::keyClicks(mass, text);
+      QTest::keyClick(mass, Qt::Key_Return);
+    };
+    for (const char* bad : {"-1", "0"}) {
+      type(bad);
+      QCOMPARE(*doc.scene().characters[0].bodies[1].mass, before);
+      QCOMPARE(doc.undoStack()->count(), commands);
+      QVERIFY2(form->message().contains("Mass must be at least 0.001 kg"), qPrintable(form->message()));
+      QCOMPARE(mass->value(), before);
+    }
+    type("2");
+    QCOMPARE(*doc.scene().characters[0].bodies[1].mass, 2.0);
+    QVERIFY(form->message().isEmpty());
+  }
+
   // File > New starts from a clean status: not the previous scene's solve result.
   void newSceneClearsThePreviousResult() {
     MainWindow w;

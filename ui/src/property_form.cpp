@@ -4,24 +4,42 @@
 #include <QComboBox>
 #include <QDoubleSpinBox>
 #include <QHBoxLayout>
+#include <QLabel>
+#include <QVBoxLayout>
+#include <algorithm>
 #include <QLineEdit>
 #include <QWheelEvent>
 
 namespace spacetime::ui {
 
 PropertyForm::PropertyForm(Document* doc, int mergeKind, QWidget* parent)
-    : QWidget(parent), doc_(doc), mergeKind_(mergeKind), layout_(new QFormLayout(this)) {
-  layout_->setContentsMargins(4, 4, 4, 4);
+    : QWidget(parent), doc_(doc), mergeKind_(mergeKind), layout_(new QFormLayout), message_(new QLabel) {
+  auto* outer = new QVBoxLayout(this);
+  outer->setContentsMargins(4, 4, 4, 4);
+  layout_->setContentsMargins(0, 0, 0, 0);
   layout_->setFieldGrowthPolicy(QFormLayout::AllNonFixedFieldsGrow);
+  outer->addLayout(layout_);
+  message_->setWordWrap(true);
+  message_->setStyleSheet("color: #d04030;");
+  message_->hide();
+  outer->addWidget(message_);
+}
+
+void PropertyForm::refuse(const QString& why) {
+  message_->setText(why);
+  message_->show();
+  refresh();  // the field shows the value the scene kept
 }
 
 void PropertyForm::clear() {
+  message_->hide();
   while (layout_->rowCount() > 0) layout_->removeRow(0);
   rows_.clear();
 }
 
 void PropertyForm::commit(const QString& label, int row, const std::function<void(Scene&)>& change) {
   if (refreshing_) return;
+  message_->hide();
   doc_->edit(tr("Change %1").arg(label), change, mergeKind_ + row + 1);
 }
 
@@ -67,11 +85,20 @@ QDoubleSpinBox* spinBox(double min, double max, double step, int decimals) {
 void PropertyForm::addDouble(const QString& label, std::function<double(const Scene&)> get,
                              std::function<void(Scene&, double)> set, double min, double max,
                              double step, int decimals, const QString& suffix) {
-  auto* s = spinBox(min, max, step, decimals);
+  // The field takes any number down to -max, so a value below the smallest allowed is refused
+  // with a message: a spin box limited to [min, max] silently turned a typed -1 kg into 1 kg.
+  auto* s = spinBox(std::min(min, -max), max, step, decimals);
   s->setSuffix(suffix);
   const int row = static_cast<int>(rows_.size());
-  connect(s, &QDoubleSpinBox::valueChanged, this,
-          [=, this](double v) { commit(label, row, [&](Scene& sc) { set(sc, v); }); });
+  connect(s, &QDoubleSpinBox::valueChanged, this, [=, this](double v) {
+    if (refreshing_) return;
+    if (v < min) {
+      refuse(tr("%1 must be at least %2%3: %4%3 was not applied.")
+                 .arg(label, QString::number(min), suffix, QString::number(v)));
+      return;
+    }
+    commit(label, row, [&](Scene& sc) { set(sc, v); });
+  });
   rows_.push_back({label, s, [=, this] { s->setValue(get(doc_->scene())); }});
   layout_->addRow(label, s);
 }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <QFormLayout>
+#include <QLabel>
 #include <QStringList>
 #include <QWidget>
 #include <functional>
@@ -37,6 +38,8 @@ class PropertyForm : public QWidget {
   void refresh();
   // The editor widgets in row order (tests drive them like a user would).
   QWidget* editor(const QString& label) const;
+  // Why the last value typed was refused, shown under the form; empty after an accepted edit.
+  QString message() const { return message_->isHidden() ? QString() : message_->text(); }
 
  private:
   struct Row {
@@ -45,10 +48,12 @@ class PropertyForm : public QWidget {
     std::function<void()> refresh;
   };
   void commit(const QString& label, int row, const std::function<void(Scene&)>& change);
+  void refuse(const QString& why);  // shows why, and the fields the scene's values again
 
   Document* doc_;
   int mergeKind_;
   QFormLayout* layout_;
+  QLabel* message_;  // why the last value typed was refused (hidden after an accepted edit)
   std::vector<Row> rows_;
   bool refreshing_ = false;
 };
