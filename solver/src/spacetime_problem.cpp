@@ -903,8 +903,19 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
     const std::string label = "formula '" + t.id + "'";
     for (double e : t.interval ? std::vector<double>{t.start, t.end} : std::vector<double>{t.time})
       if (!checkOutsideWindows(e, label, error)) return false;
-    const std::vector<double> times =
+    // An interval formula is imposed where the validity report checks it: at the samples and on
+    // the report's dense grid (kDenseGridFactor). At the samples alone, a converged solve could
+    // fail its own check between them (q.j2 <= 0.3 over the jump's flight: met at the samples,
+    // off by 1.4 mrad between them, exit 4).
+    std::vector<double> times =
         t.interval ? intervalTimes(transcription_, t.character, t.start, t.end) : std::vector<double>{t.time};
+    if (t.interval) {
+      for (double d : transcription_.denseGrid(kDenseGridFactor))
+        if (d > t.start + kTimeTolerance && d < t.end - kTimeTolerance) times.push_back(d);
+      std::sort(times.begin(), times.end());
+      times.erase(std::unique(times.begin(), times.end(), [](double a, double b) { return b - a <= kTimeTolerance; }),
+                  times.end());
+    }
     for (double time : times) {
       std::string why;
       const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
