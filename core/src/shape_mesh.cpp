@@ -193,6 +193,39 @@ double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, c
   return lowest;
 }
 
+Eigen::Vector3d geometryTip(const Geometry& g) {
+  if (g.kind == GeometryKind::None) return Eigen::Vector3d::Zero();
+  if ((g.kind == GeometryKind::Capsule || g.kind == GeometryKind::Cylinder) && g.axis == 1)
+    return Eigen::Vector3d(g.offset.x(), g.offset.y() + 0.5 * g.size[1], g.offset.z());
+  // The highest point is the lowest one of the shape turned upside down (a half turn about x).
+  const Eigen::Matrix3d flip = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  return Eigen::Vector3d(g.offset.x(), -lowestHeight(g, flip, Eigen::Vector3d::Zero()), g.offset.z());
+}
+
+std::vector<Eigen::Vector3d> geometryBaseCorners(const Geometry& g, bool planar) {
+  if (g.kind == GeometryKind::None) return {Eigen::Vector3d::Zero()};
+  const Eigen::Vector3d o = g.offset;
+  const double low = lowestHeight(g, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  auto at = [&](double dx, double dz) { return Eigen::Vector3d(o.x() + dx, low, o.z() + dz); };
+  // Two points along x (planar) or four around the centre, dx and dz out.
+  auto spread = [&](double dx, double dz) -> std::vector<Eigen::Vector3d> {
+    if (planar) return {at(-dx, 0), at(dx, 0)};
+    return {at(-dx, -dz), at(dx, -dz), at(dx, dz), at(-dx, dz)};
+  };
+  const double r = g.size[0], half = 0.5 * g.size[1];
+  switch (g.kind) {
+    case GeometryKind::Box: return spread(0.5 * g.size.x(), 0.5 * g.size.z());
+    case GeometryKind::Sphere: return {at(0, 0)};
+    case GeometryKind::Capsule:
+    case GeometryKind::Cylinder:
+      if (g.axis == 1) return g.kind == GeometryKind::Capsule ? std::vector<Eigen::Vector3d>{at(0, 0)} : spread(r, r);
+      if (g.axis == 0) return {at(-half, 0), at(half, 0)};
+      return planar ? std::vector<Eigen::Vector3d>{at(0, 0)} : std::vector<Eigen::Vector3d>{at(0, -half), at(0, half)};
+    case GeometryKind::None: break;
+  }
+  return {at(0, 0)};
+}
+
 std::vector<LowestPointFeature> lowestPointFeatures(const Geometry& g) {
   std::vector<LowestPointFeature> features;
   const double r = g.size[0], halfLength = 0.5 * g.size[1];

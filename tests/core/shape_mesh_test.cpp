@@ -153,5 +153,39 @@ TEST(ShapeMesh, LowestPointFeaturesFindTheShapesBottom) {
   }
 }
 
+// Where the builder attaches things: a new child's joint at the parent's tip (an upright
+// capsule's axis end; any other shape's highest point, checked against its mesh) and a new
+// contact's points on the bottom of the body (every point at the shape's lowest height, a box's
+// corners at its x (and z) extents).
+TEST(ShapeMesh, TipAndBaseCornersSitOnTheShape) {
+  Geometry box{GeometryKind::Box, Eigen::Vector3d(0.2, 0.1, 0.12), 1, Eigen::Vector3d(0.01, 0.05, 0)};
+  Geometry capsule{GeometryKind::Capsule, Eigen::Vector3d(0.025, 0.2, 0), 1, Eigen::Vector3d(0, 0.1, 0)};
+  Geometry lying{GeometryKind::Capsule, Eigen::Vector3d(0.02, 0.3, 0), 0, Eigen::Vector3d(0, 0.02, 0)};
+  Geometry sphere{GeometryKind::Sphere, Eigen::Vector3d(0.1, 0, 0), 1, Eigen::Vector3d(0, 0.3, 0)};
+  EXPECT_TRUE(geometryTip(capsule).isApprox(Eigen::Vector3d(0, 0.2, 0)));
+  EXPECT_TRUE(geometryTip(Geometry{}).isZero());
+  for (const Geometry* g : {&box, &lying, &sphere}) {
+    double meshHighest = -1e300;
+    for (const Eigen::Vector3f& p : geometryMesh(*g).positions) meshHighest = std::max(meshHighest, double(p.y()));
+    EXPECT_GE(geometryTip(*g).y(), meshHighest - 1e-6);
+    EXPECT_LE(geometryTip(*g).y(), meshHighest + 0.02 * g->size.maxCoeff());
+  }
+  EXPECT_NEAR(geometryTip(box).y(), 0.1, 1e-15);
+  EXPECT_NEAR(geometryTip(sphere).y(), 0.4, 1e-15);
+
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const std::vector<Eigen::Vector3d> planar = geometryBaseCorners(box, true);
+  ASSERT_EQ(planar.size(), 2u);
+  EXPECT_TRUE(planar[0].isApprox(Eigen::Vector3d(-0.09, 0, 0)));
+  EXPECT_TRUE(planar[1].isApprox(Eigen::Vector3d(0.11, 0, 0)));
+  EXPECT_EQ(geometryBaseCorners(box, false).size(), 4u);
+  EXPECT_EQ(geometryBaseCorners(lying, true).size(), 2u);
+  EXPECT_EQ(geometryBaseCorners(sphere, true).size(), 1u);
+  for (const Geometry* g : {&box, &capsule, &lying, &sphere})
+    for (bool flat : {true, false})
+      for (const Eigen::Vector3d& p : geometryBaseCorners(*g, flat))
+        EXPECT_NEAR(p.y(), lowestHeight(*g, I, Eigen::Vector3d::Zero()), 1e-15);
+}
+
 }  // namespace
 }  // namespace spacetime

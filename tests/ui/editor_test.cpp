@@ -26,6 +26,7 @@
 #include <cmath>
 
 #include "core/scene_io.h"
+#include "core/shape_mesh.h"
 #include "ui/main_window.h"
 #include "ui/render_scene.h"
 #include "ui/solved_motion.h"
@@ -102,21 +103,27 @@ class EditorTest : public QObject {
     QCOMPARE(doc.scene().characters[0].bodies.size(), size_t(2));
     const std::string link = doc.scene().characters[0].bodies[1].id;
     QVERIFY(doc.selectedBody() == link);
+    // The new character's box stands on the ground, and the new link on the box's top.
+    const BodySpec base = doc.scene().characters[0].bodies[0];
+    QCOMPARE(lowestHeight(base.geometry, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()), 0.0);
+    const double shoulder = doc.scene().characters[0].bodies[1].joint.origin.y();
+    QCOMPARE(shoulder, base.geometry.size.y());
     auto* mass = qobject_cast<QDoubleSpinBox*>(builder.form()->editor("Mass"));
     QVERIFY(mass);
     mass->setValue(0.8);
     QCOMPARE(*doc.scene().characters[0].bodies[1].mass, 0.8);
 
     // Pin the link's tip at t = 0.5 where the joint angle is asin(0.6): the tip is at
-    // (-0.12, 0.36), which the form's spin boxes hold exactly.
+    // (-0.12, shoulder + 0.16), which the form's spin boxes hold exactly. A new pin holds the
+    // body's tip (the capsule's end, 0.2 along it), not its joint.
     doc.setCurrentTime(0.5);
     const std::string pin = w.constraints()->addPin();
     QVERIFY(!pin.empty());
     PropertyForm* form = w.constraints()->form();
     QVERIFY(form->editor("Body point"));
-    setSpin(form->editor("Body point"), "y", 0.2);
+    QCOMPARE(doc.scene().terms.back().point.y(), 0.2);
     const double angle = std::asin(0.6);
-    const Eigen::Vector3d target(-0.2 * std::sin(angle), 0.2 + 0.2 * std::cos(angle), 0);
+    const Eigen::Vector3d target(-0.2 * std::sin(angle), shoulder + 0.2 * std::cos(angle), 0);
     setSpin(form->editor("Target"), "x", target.x());
     setSpin(form->editor("Target"), "y", target.y());
     const TermSpec& term = doc.scene().terms.back();
@@ -131,6 +138,20 @@ class EditorTest : public QObject {
     const Eigen::Vector3d tip = bodyToWorld(model, q, model.bodyIndex(link), Eigen::Vector3d(0, 0.2, 0));
     QVERIFY2((tip - target).norm() < 1e-5, qPrintable(QString("tip misses the pin by %1 m").arg((tip - target).norm())));
     QVERIFY(std::abs(q[0] - angle) < 1e-4);
+
+    // A contact under the box holds its two bottom corners once the character floats (planar):
+    // one point would leave it pivoting.
+    doc.selectBody(0, {});
+    root = qobject_cast<QComboBox*>(builder.form()->editor("Root"));  // the form was rebuilt
+    QVERIFY(root);
+    root->setCurrentIndex(1);  // planar floating
+    QVERIFY(doc.scene().characters[0].root == RootKind::Planar);
+    doc.selectBody(0, base.id);
+    QVERIFY(!w.constraints()->addContact().empty());
+    const TermSpec& contact = doc.scene().terms.back();
+    QCOMPARE(contact.points.size(), size_t(2));
+    QCOMPARE(contact.points[0], Eigen::Vector3d(-0.1, 0, 0));
+    QCOMPARE(contact.points[1], Eigen::Vector3d(0.1, 0, 0));
   }
 
   void undoRedoRestoresIdenticalDocumentsForEveryKindOfEdit() {

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "core/scene_io.h"
+#include "core/shape_mesh.h"
 
 namespace spacetime::ui {
 
@@ -290,6 +291,9 @@ void BuilderPanel::addCharacter() {
     b.id = body;
     b.geometry.kind = GeometryKind::Box;
     b.geometry.size = Eigen::Vector3d(0.2, 0.1, 0.1);
+    // The box rests on its origin, so a new character stands on the ground instead of sinking
+    // half into it.
+    b.geometry.offset = Eigen::Vector3d(0, 0.5 * b.geometry.size.y(), 0);
     b.mass = 1.0;
     c.bodies.push_back(b);
     s.characters.push_back(c);
@@ -310,10 +314,10 @@ void BuilderPanel::addBody() {
     const auto names = ch.dofNames();
     if (std::find(names.begin(), names.end(), joint) == names.end()) break;
   }
-  // A new link hangs above its parent's origin by the parent's length, along y.
+  // A new link stands on its parent's tip (the end of its geometry along +y), not in the air
+  // above it or inside it.
   const BodySpec* p = findBody(s, c, parent);
-  double above = 0.2;
-  if (p && p->geometry.kind == GeometryKind::Capsule && p->geometry.axis == 1) above = p->geometry.size[1];
+  const Eigen::Vector3d tip = p ? geometryTip(p->geometry) : Eigen::Vector3d::Zero();
   doc_->edit(tr("Add body"), [&](Scene& sc) {
     BodySpec b;
     b.id = id;
@@ -321,7 +325,7 @@ void BuilderPanel::addBody() {
     b.joint.id = joint;
     b.joint.kind = JointKind::Revolute;
     b.joint.axis = Eigen::Vector3d::UnitZ();
-    b.joint.origin = Eigen::Vector3d(0, above, 0);
+    b.joint.origin = tip;
     b.geometry.kind = GeometryKind::Capsule;
     b.geometry.size = Eigen::Vector3d(0.025, 0.2, 0);
     b.geometry.axis = 1;

@@ -7,6 +7,7 @@
 #include <QToolButton>
 #include <QVBoxLayout>
 
+#include "core/shape_mesh.h"
 #include "ui/render_scene.h"
 
 namespace spacetime::ui {
@@ -304,6 +305,9 @@ std::string ConstraintsPanel::addPin() {
   TermSpec pin = newTerm("pin", TermKind::Pin, c);
   pin.body = body;
   pin.time = t;
+  // The body's tip (a hand, a head), not its origin, which is the joint.
+  for (const BodySpec& b : doc_->scene().characters[c].bodies)
+    if (b.id == body) pin.point = geometryTip(b.geometry);
   pin.position = bodyToWorld(model, q, model.bodyIndex(body), pin.point);
   if (doc_->scene().characters[c].root == RootKind::Planar) pin.axes = {true, true, false};
   return addTerm(tr("Add pin"), pin);
@@ -338,7 +342,11 @@ std::string ConstraintsPanel::addContact() {
   const Scene& s = doc_->scene();
   TermSpec contact = newTerm("contact", TermKind::Contact, c);
   contact.body = body;
+  // The bottom of the body's geometry: a box's base corners (two for a planar character, which
+  // one point would leave pivoting), a sphere's lowest point.
   contact.points = {Eigen::Vector3d::Zero()};
+  for (const BodySpec& b : s.characters[c].bodies)
+    if (b.id == body) contact.points = geometryBaseCorners(b.geometry, s.characters[c].root == RootKind::Planar);
   const double span = 0.2 * (s.endTime - s.startTime);
   contact.start = std::max(s.startTime, doc_->currentTime() - span / 2);
   contact.end = std::min(s.endTime, contact.start + span);

@@ -46,6 +46,19 @@ TriangleMesh geometryMesh(const Geometry& geometry);
 // GeometryKind::None.
 double lowestHeight(const Geometry& geometry, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& origin);
 
+// The far end of a body's geometry along its +y axis, in the body frame: where the builder puts
+// a new child's joint and a new pin's body point. A capsule or cylinder along y: the end of its
+// axis (a child capsule's round end then overlaps it, as a limb's joint does); any other shape:
+// its highest point. 0 for GeometryKind::None.
+Eigen::Vector3d geometryTip(const Geometry& geometry);
+
+// The points a contact under a body holds by default, in the body frame, at the bottom of its
+// geometry: a box's bottom corners (two, front and back along x, for a planar character; four
+// otherwise), a horizontal capsule's or cylinder's two ends, an upright cylinder's base rim
+// (two or four points), a sphere's or an upright capsule's lowest point. A planar root needs two
+// points apart along x to stand: one point is a pivot.
+std::vector<Eigen::Vector3d> geometryBaseCorners(const Geometry& geometry, bool planar);
+
 // A place where a shape's lowest point can be, in the body frame: a point, a sphere of radius
 // `margin` around it, or a disc of radius `discRadius` around it, normal to the unit vector
 // `discNormal`. Its lowest world height with the body at (rotation, origin) is

@@ -22,7 +22,7 @@ class ConstraintsPanel : public QWidget {
   std::string addPin();         // the selected body's origin where it is at the current time
   std::string keyCurrentPose(); // a keyframe of the selected character's pose now
   std::string addRest();
-  std::string addContact();     // the selected body's origin on the ground around now
+  std::string addContact();     // the selected body's base corners on the ground around now
   std::string addClearance();
   std::string addFormula();
   void removeSelected();
