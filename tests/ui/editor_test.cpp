@@ -537,6 +537,26 @@ class EditorTest : public QObject {
     QVERIFY(form->message().isEmpty());
   }
 
+  // Open Recent lists a file once however its path was spelled.
+  void openRecentListsAFileOnce() {
+    QTemporaryDir dir;
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/particle.json"));
+    QString error;
+    const QString path = dir.filePath("recent.json");
+    QVERIFY2(w.saveFile(path, &error), qPrintable(error));
+    QVERIFY2(w.saveFile(dir.path() + "/./recent.json", &error), qPrintable(error));
+    QVERIFY2(w.openFile(path, &error), qPrintable(error));
+    QMenu* recent = nullptr;
+    for (QMenu* m : w.findChildren<QMenu*>())
+      if (m->title().contains("Recent")) recent = m;
+    QVERIFY(recent);
+    int entries = 0;
+    for (QAction* a : recent->actions())
+      if (QFileInfo(a->text()).fileName() == "recent.json") ++entries;
+    QCOMPARE(entries, 1);
+  }
+
   // File > New starts from a clean status: not the previous scene's solve result.
   void newSceneClearsThePreviousResult() {
     MainWindow w;

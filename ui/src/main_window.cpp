@@ -551,9 +551,18 @@ bool MainWindow::maybeSave() {
 
 void MainWindow::addRecent(const QString& path) {
   QSettings settings;
-  QStringList recent = settings.value("recentFiles").toStringList();
-  recent.removeAll(path);
-  recent.prepend(QFileInfo(path).absoluteFilePath());
+  // One entry per file, however its path was spelled (relative, with "." or "..", through a
+  // symbolic link): the list used to keep the spelling it removed and add the absolute one.
+  auto canonical = [](const QString& p) {
+    const QFileInfo info(p);
+    const QString real = info.canonicalFilePath();
+    return real.isEmpty() ? QDir::cleanPath(info.absoluteFilePath()) : real;
+  };
+  const QString file = canonical(path);
+  QStringList recent;
+  for (const QString& p : settings.value("recentFiles").toStringList())
+    if (canonical(p) != file && !recent.contains(canonical(p))) recent.append(canonical(p));
+  recent.prepend(file);
   while (recent.size() > 10) recent.removeLast();
   settings.setValue("recentFiles", recent);
   rebuildRecentMenu();
