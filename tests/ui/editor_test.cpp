@@ -3,6 +3,7 @@
 // user would check: the motion meets the pin, undo/redo restores identical documents, saving
 // loses nothing, the interface never stalls while the solver runs, Stop leaves a consistent
 // document, and the viewport draws the lamp in its colours.
+#include <QChart>
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDockWidget>
@@ -16,11 +17,14 @@
 #include <QFileInfo>
 #include <QJsonDocument>
 #include <QJsonObject>
+#include <QLineSeries>
 #include <QMenu>
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
 #include <cstring>
+#include <map>
+#include <set>
 #include <QChartView>
 #include <QValueAxis>
 #include <cmath>
@@ -666,6 +670,44 @@ class EditorTest : public QObject {
   // derivative of its plotted position, the plotted ground forces change the centre of mass's
   // momentum as Newton says, and the physics residual stays within the validity report's 1 % of
   // weight. The value axis is labelled at round numbers.
+  // A series keeps its colour when another is added, no two plotted series share one, and a
+  // left click in the plot moves the time there.
+  void graphColoursAreStableAndAClickSetsTheTime() {
+    MainWindow w;
+    w.resize(1400, 900);
+    w.show();
+    QVERIFY(solvedParticle(w));
+    GraphPanel* graphs = w.graphs();
+    const std::vector<std::string> dofs = w.document()->scene().characters[0].dofNames();
+    QVERIFY(dofs.size() >= 3);
+    auto key = [&](const char* what, int d) { return QString("%1/0/%2").arg(what, QString::fromStdString(dofs[d])); };
+    auto colours = [&] {
+      std::map<QString, QColor> out;
+      for (QAbstractSeries* s : graphs->view()->chart()->series())
+        out[s->name()] = static_cast<QLineSeries*>(s)->color();
+      return out;
+    };
+    graphs->setChecked(key("q", 0), true);
+    graphs->setChecked(key("q", 1), true);
+    const auto before = colours();
+    QVERIFY(before.size() >= 2);
+    graphs->setChecked(key("q", 2), true);
+    graphs->setChecked(key("qd", 0), true);
+    const auto after = colours();
+    QCOMPARE(after.size(), before.size() + 2);
+    for (const auto& [name, colour] : before) QCOMPARE(after.at(name), colour);
+    std::set<QRgb> distinct;
+    for (const auto& entry : after) distinct.insert(entry.second.rgb());
+    QCOMPARE(distinct.size(), after.size());
+
+    GraphView* view = graphs->view();
+    QChart* chart = view->chart();
+    QVERIFY(QTest::qWaitForWindowExposed(&w));
+    const QPointF at = chart->mapToPosition(QPointF(0.7, 0), chart->series().front());
+    QTest::mouseClick(view->viewport(), Qt::LeftButton, Qt::NoModifier, view->mapFromScene(at));
+    QVERIFY2(std::abs(w.document()->currentTime() - 0.7) < 0.01, qPrintable(QString::number(w.document()->currentTime())));
+  }
+
   void graphsPlotTheSolvedLampsPhysics() {
     QCOMPARE(niceTickInterval(28.6), 5.0);
     QCOMPARE(niceTickInterval(1.0), 0.2);

@@ -10,7 +10,9 @@
 #include <QTreeWidgetItemIterator>
 #include <QValueAxis>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "core/atomic_file.h"
 #include "dynamics/algorithms.h"
@@ -151,6 +153,30 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
   return false;
 }
 
+QColor seriesColour(const QString& name, const std::vector<QColor>& taken) {
+  // Twelve colours apart from each other on the white plot (Tableau's and ColorBrewer's).
+  static const QColor palette[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},
+                                   {148, 103, 189}, {140, 86, 75},  {227, 119, 194}, {127, 127, 127},
+                                   {188, 189, 34},  {23, 190, 207}, {0, 0, 128},    {128, 128, 0}};
+  constexpr size_t n = std::size(palette);
+  const size_t first = qHash(name) % n;
+  for (size_t k = 0; k < n; ++k) {
+    const QColor& c = palette[(first + k) % n];
+    if (std::find(taken.begin(), taken.end(), c) == taken.end()) return c;
+  }
+  return palette[first];  // more series than colours
+}
+
+void GraphView::mousePressEvent(QMouseEvent* e) {
+  if (e->button() == Qt::LeftButton && timeClicked && chart() && !chart()->series().isEmpty() &&
+      chart()->plotArea().contains(e->position())) {
+    timeClicked(chart()->mapToValue(e->position(), chart()->series().front()).x());
+    e->accept();
+    return;
+  }
+  QChartView::mousePressEvent(e);
+}
+
 void GraphView::drawForeground(QPainter* painter, const QRectF&) {
   if (!chart() || chart()->series().isEmpty()) return;
   const QRectF area = chart()->plotArea();
@@ -204,6 +230,7 @@ GraphPanel::GraphPanel(Document* doc, QWidget* parent) : QWidget(parent), doc_(d
   view_->setRenderHint(QPainter::Antialiasing, false);  // software-rendered: keep repaints cheap
   view_->setMouseTracking(true);
   view_->series = &plotted_;
+  view_->timeClicked = [this](double t) { doc_->setCurrentTime(t); };  // clamped to the clip
   splitter->addWidget(view_);
   splitter->setStretchFactor(1, 3);
   splitter->setSizes({180, 600});
@@ -334,9 +361,12 @@ void GraphPanel::replot() {
     chart->addAxis(x, Qt::AlignBottom);
     chart->addAxis(y, Qt::AlignLeft);
     lines.clear();
+    std::vector<QColor> taken;
     for (const PlotSeries& s : plotted) {
       auto* line = new QLineSeries;
       line->setName(s.name);
+      taken.push_back(seriesColour(s.name, taken));
+      line->setColor(taken.back());
       chart->addSeries(line);
       line->attachAxis(x);
       line->attachAxis(y);

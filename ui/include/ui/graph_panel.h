@@ -6,9 +6,11 @@
 #pragma once
 
 #include <QChartView>
+#include <QColor>
 #include <QLineEdit>
 #include <QTreeWidget>
 #include <QWidget>
+#include <functional>
 #include <set>
 
 #include "ui/document.h"
@@ -37,6 +39,12 @@ struct ValueAxisRange {
 };
 ValueAxisRange valueAxisRange(double lo, double hi);
 
+// The colour of a series: its name's own colour from a fixed palette, so a series keeps its
+// colour when others are added or removed (Qt Charts' theme hands colours out in order, and
+// every colour moved when a series was added). `taken` are the colours of the series before it
+// in the plot: a name whose colour is taken gets the next free one.
+QColor seriesColour(const QString& name, const std::vector<QColor>& taken);
+
 class GraphView : public QChartView {
   Q_OBJECT
  public:
@@ -44,10 +52,12 @@ class GraphView : public QChartView {
   double cursorTime = 0;
   const std::vector<PlotSeries>* series = nullptr;
   QString hoverText;  // the values under the mouse, drawn in the corner
+  std::function<void(double)> timeClicked;  // a left click in the plot: the time under it
 
  protected:
   void drawForeground(QPainter* painter, const QRectF& rect) override;
   void mouseMoveEvent(QMouseEvent* e) override;
+  void mousePressEvent(QMouseEvent* e) override;
 };
 
 class GraphPanel : public QWidget {
@@ -61,6 +71,7 @@ class GraphPanel : public QWidget {
   QString plottedCsv() const;
   bool exportCsv(const QString& path, QString* error) const;
   QTreeWidget* quantities() const { return tree_; }
+  GraphView* view() const { return view_; }
 
  private:
   void rebuildTree();
