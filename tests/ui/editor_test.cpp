@@ -19,6 +19,8 @@
 #include <QJsonObject>
 #include <QLineSeries>
 #include <QMenu>
+#include <QRegularExpression>
+#include <QSpinBox>
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QtTest>
@@ -262,8 +264,22 @@ class EditorTest : public QObject {
     QVERIFY(bvh.open(QIODevice::ReadOnly));
     const QString text = QString::fromUtf8(bvh.readAll());
     QVERIFY(text.startsWith("HIERARCHY\nROOT "));
-    const auto frames = w.document()->motion()->animation.characters[0].times.size();
-    QVERIFY2(text.contains(QString("Frames: %1\n").arg(frames)), qPrintable(text.left(400)));
+    // At the timeline's rate (30 fps by default), whatever the display samples: the particle's
+    // 1 s clip is 31 frames of 1/30 s.
+    QCOMPARE(w.timeline()->framesPerSecond(), 30);
+    QVERIFY2(text.contains("Frames: 31\n"), qPrintable(text.left(400)));
+    const QRegularExpressionMatch frameTime = QRegularExpression("Frame Time: ([0-9.eE+-]+)").match(text);
+    QVERIFY(frameTime.hasMatch());
+    QVERIFY(std::abs(frameTime.captured(1).toDouble() - 1.0 / 30) < 1e-9);
+    // And at 24 fps: 25 frames.
+    auto* fps = w.timeline()->findChild<QSpinBox*>();
+    QVERIFY(fps);
+    fps->setValue(24);
+    QVERIFY2(w.exportBvh(dir.filePath("bvh24"), &error), qPrintable(error));
+    QFile bvh24(dir.filePath("bvh24/particle.bvh"));
+    QVERIFY(bvh24.open(QIODevice::ReadOnly));
+    const QString text24 = QString::fromUtf8(bvh24.readAll());
+    QVERIFY2(text24.contains("Frames: 25\n"), qPrintable(text24.left(400)));
   }
 
   // The dock layout survives a restart: closing saves it to QSettings, the next window restores

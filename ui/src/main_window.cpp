@@ -245,8 +245,10 @@ void MainWindow::createActions() {
                          bool (MainWindow::*fn)(const QString&, QString*)) {
     return [=, this] {
       const QString path = QFileDialog::getSaveFileName(this, title, name, filter);
+      if (path.isEmpty()) return;
       QString error;
-      if (!path.isEmpty() && !(this->*fn)(path, &error)) QMessageBox::warning(this, title, error);
+      if (!(this->*fn)(path, &error)) QMessageBox::warning(this, title, error);
+      else progress_->setText(tr("Exported %1").arg(QDir::toNativeSeparators(path)));
     };
   };
   action(exportMenu, tr("Motion (JSON)…"), QKeySequence(), exportTo(tr("Export motion"), "motion.json", "JSON (*.json)", &MainWindow::exportMotionJson));
@@ -254,8 +256,10 @@ void MainWindow::createActions() {
   auto exportDir = [this](const QString& title, bool (MainWindow::*fn)(const QString&, QString*)) {
     return [=, this] {
       const QString dir = QFileDialog::getExistingDirectory(this, title);
+      if (dir.isEmpty()) return;
       QString error;
-      if (!dir.isEmpty() && !(this->*fn)(dir, &error)) QMessageBox::warning(this, title, error);
+      if (!(this->*fn)(dir, &error)) QMessageBox::warning(this, title, error);
+      else progress_->setText(tr("Exported into %1").arg(QDir::toNativeSeparators(dir)));
     };
   };
   action(exportMenu, tr("Animated scene (glTF)…"), QKeySequence(), exportTo(tr("Export glTF"), "motion.glb", "glTF binary (*.glb)", &MainWindow::exportGltf));
@@ -409,8 +413,18 @@ bool MainWindow::exportUrdf(const QString& directory, QString* error) {
 bool MainWindow::exportBvh(const QString& directory, QString* error) {
   const std::shared_ptr<const SolvedMotion> motion = doc_.motion();
   if (!motion || !motionFitsScene(*motion, doc_.scene())) { *error = tr("Nothing to export: solve first."); return false; }
+  // At the timeline's frame rate: a BVH importer (Blender's) makes one scene frame of each BVH
+  // frame, so the display's 120 Hz samples played a 1.2 s jump over 6 s at 24 fps. The motion is
+  // sampled again from its solution at that rate (its spline, not an interpolation of samples).
+  const double rate = timeline_->framesPerSecond();
+  Animation animation = motion->animation;
+  if (motion->scene) {
+    std::string why;
+    auto problem = SpacetimeProblem::build(*motion->scene, &why);
+    if (problem && problem->restore(motion->state)) animation = sampleAnimation(*problem, rate);
+  }
   return writeCharacterFiles(directory, "bvh", error, [&](size_t i, const CharacterSpec& c, const Model<double>& model) {
-    return motionBvh(model, c, motion->animation.characters[i]);
+    return motionBvh(model, c, animation.characters[i]);
   });
 }
 
