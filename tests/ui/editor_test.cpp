@@ -638,6 +638,25 @@ class EditorTest : public QObject {
     QCOMPARE(end->value(), 1.0);
   }
 
+  // At 1280x720 a docked form shows every vector component whole: the fields wrap under their
+  // labels instead of running off the panel (the gravity's z needed sideways scrolling).
+  void vectorFieldsFitTheDockedPanel() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1280, 720)));
+    for (QDockWidget* d : w.findChildren<QDockWidget*>())
+      if (d->windowTitle() == "Scene") d->raise();
+    QTest::qWait(50);
+    QWidget* gravity = w.sceneSettings()->form()->editor("Gravity");
+    QVERIFY(gravity && gravity->isVisible());
+    QWidget* panel = w.sceneSettings();
+    for (QDoubleSpinBox* s : gravity->findChildren<QDoubleSpinBox*>()) {
+      const int needed = s->fontMetrics().horizontalAdvance(s->text()) + 4;
+      QVERIFY2(s->width() >= needed, qPrintable(QString("%1: %2 px for %3 px of text").arg(s->objectName()).arg(s->width()).arg(needed)));
+      const QPoint right = s->mapTo(panel, QPoint(s->width(), 0));
+      QVERIFY2(right.x() <= panel->width(), qPrintable(QString("%1 ends at %2 of %3").arg(s->objectName()).arg(right.x()).arg(panel->width())));
+    }
+  }
+
   void stopLeavesAConsistentDocument() {
     MainWindow w;
     QVERIFY(openLuxo(w));

@@ -90,9 +90,7 @@ BuilderPanel::BuilderPanel(Document* doc, QWidget* parent) : QWidget(parent), do
   tree_->setHeaderLabels({tr("Body"), tr("Joint")});
   tree_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
   form_ = new PropertyForm(doc_, kMergeBodyField);
-  auto* scroll = new QScrollArea;
-  scroll->setWidget(form_);
-  scroll->setWidgetResizable(true);
+  QScrollArea* scroll = form_->inScrollArea();
   auto* split = new QSplitter(Qt::Vertical);
   split->addWidget(tree_);
   split->addWidget(scroll);

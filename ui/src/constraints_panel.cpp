@@ -69,9 +69,7 @@ ConstraintsPanel::ConstraintsPanel(Document* doc, QWidget* parent) : QWidget(par
   list_->setHeaderLabels({tr("Term"), tr("Kind"), tr("When")});
   list_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
   form_ = new PropertyForm(doc_, kMergeTermField);
-  auto* scroll = new QScrollArea;
-  scroll->setWidget(form_);
-  scroll->setWidgetResizable(true);
+  QScrollArea* scroll = form_->inScrollArea();
   auto* split = new QSplitter(Qt::Vertical);
   split->addWidget(list_);
   split->addWidget(scroll);

@@ -18,11 +18,20 @@ PropertyForm::PropertyForm(Document* doc, int mergeKind, QWidget* parent)
   outer->setContentsMargins(4, 4, 4, 4);
   layout_->setContentsMargins(0, 0, 0, 0);
   layout_->setFieldGrowthPolicy(QFormLayout::AllNonFixedFieldsGrow);
+  layout_->setRowWrapPolicy(QFormLayout::WrapLongRows);
   outer->addLayout(layout_);
   message_->setWordWrap(true);
   message_->setStyleSheet("color: #d04030;");
   message_->hide();
   outer->addWidget(message_);
+}
+
+QScrollArea* PropertyForm::inScrollArea() {
+  auto* scroll = new QScrollArea;
+  scroll->setWidget(this);
+  scroll->setWidgetResizable(true);
+  scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  return scroll;
 }
 
 void PropertyForm::refuse(const QString& why) {
@@ -115,6 +124,12 @@ void PropertyForm::addVector(const QString& label, std::function<Eigen::Vector3d
   for (int i = 0; i < 3; ++i) {
     spins[i] = spinBox(min, max, step, decimals);
     spins[i]->setObjectName(QString("xyz"[i]));
+    // Three fields side by side fit a docked panel without scrolling sideways: no arrow
+    // buttons (the keyboard's arrows and the focused wheel still step) and no width floor
+    // from the range's longest text.
+    spins[i]->setButtonSymbols(QAbstractSpinBox::NoButtons);
+    spins[i]->setMinimumWidth(40);
+    spins[i]->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Fixed);
     h->addWidget(spins[i]);
     connect(spins[i], &QDoubleSpinBox::valueChanged, this, [=, this](double v) {
       commit(label, row, [&](Scene& sc) {

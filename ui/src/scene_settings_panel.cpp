@@ -15,9 +15,7 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
     : QWidget(parent), doc_(doc), form_(new PropertyForm(doc, kMergeSceneField)) {
   auto* layout = new QVBoxLayout(this);
   layout->setContentsMargins(2, 2, 2, 2);
-  auto* scroll = new QScrollArea;
-  scroll->setWidget(form_);
-  scroll->setWidgetResizable(true);
+  QScrollArea* scroll = form_->inScrollArea();
   layout->addWidget(scroll);
 
   PropertyForm& f = *form_;

@@ -6,6 +6,7 @@
 
 #include <QFormLayout>
 #include <QLabel>
+#include <QScrollArea>
 #include <QStringList>
 #include <QWidget>
 #include <functional>
@@ -38,6 +39,9 @@ class PropertyForm : public QWidget {
   void refresh();
   // The editor widgets in row order (tests drive them like a user would).
   QWidget* editor(const QString& label) const;
+  // The form in a vertical scroll area for a docked panel: it scrolls up and down, never
+  // sideways (rows too narrow for label and field put the field under its label).
+  QScrollArea* inScrollArea();
   // Why the last value typed was refused, shown under the form; empty after an accepted edit.
   QString message() const { return message_->isHidden() ? QString() : message_->text(); }
 
