@@ -897,6 +897,33 @@ class EditorTest : public QObject {
     QVERIFY(background < total);
   }
 
+  // A preview (the starting guess, an iterate) is drawn washed towards grey; the solved motion
+  // in the bodies' own colours.
+  void previewsAreDrawnWashedOut() {
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/luxo_jump.json"));
+    const Scene scene = w.document()->scene();
+    std::string error;
+    const std::unique_ptr<SpacetimeProblem> problem = SpacetimeProblem::build(scene, &error);
+    QVERIFY2(problem, error.c_str());
+    const std::shared_ptr<SolvedMotion> preview = sampleMotion(*problem);
+    QVERIFY(!preview->solved);
+    auto result = std::make_shared<SolvedMotion>(*preview);
+    result->solved = true;
+    const RenderScene washed = buildRenderScene(scene, w.document()->models(), preview.get(), RenderOptions());
+    const RenderScene own = buildRenderScene(scene, w.document()->models(), result.get(), RenderOptions());
+    QCOMPARE(washed.solids.size(), own.solids.size());
+    int compared = 0;
+    for (size_t i = 0; i < own.solids.size(); ++i) {
+      if (own.solids[i].ghost || own.solids[i].character < 0) continue;
+      // Chroma (max - min of r, g, b) shrinks by exactly 1 - kPreviewWash towards grey.
+      auto chroma = [](const glm::vec4& c) { return std::max({c.r, c.g, c.b}) - std::min({c.r, c.g, c.b}); };
+      QVERIFY(std::abs(chroma(washed.solids[i].color) - (1 - kPreviewWash) * chroma(own.solids[i].color)) < 1e-5);
+      if (chroma(own.solids[i].color) > 0.3) ++compared;  // a coloured body (the head)
+    }
+    QVERIFY(compared >= 1);
+  }
+
   // The hurdle's clearances are drawn as blocks from the ground up to their height, under the
   // cleared point's path over their interval; a clearance at the ground adds nothing, a box
   // clearance is its box, and the selected term is drawn in the selection colour.

@@ -101,6 +101,10 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
   bool firstBound = true;
   if (models.size() != scene.characters.size()) return rs;
 
+  // A preview (an iterate still being refined, or the starting guess) is drawn washed out towards
+  // grey, so it is never taken for the result: mid-solve the lamp showed tilted 50 degrees at
+  // t = 0, breaking its own start key, in its final colours.
+  const bool preview = motion && !motion->solved;
   auto drawCharacters = [&](double t, bool ghost, float alpha) {
     const std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, t);
     for (size_t c = 0; c < models.size(); ++c) {
@@ -110,6 +114,7 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
         const int i = models[c].bodyIndex(b.id);
         if (i < 0) continue;
         glm::vec4 color(toGlm(b.color), alpha);
+        if (preview) color = glm::vec4(glm::mix(glm::vec3(color), glm::vec3(0.55f), kPreviewWash), alpha);
         if (!ghost && static_cast<int>(c) == o.selectedCharacter && b.id == o.selectedBody)
           color = glm::vec4(glm::mix(glm::vec3(color), glm::vec3(1.0f, 0.55f, 0.1f), 0.6f), 1.0f);
         addGeometry(rs, b.geometry, bodyPose(d, i), color, static_cast<int>(c), b.id, ghost);

@@ -59,6 +59,9 @@ struct RenderScene {
   glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};  // of the characters over the whole clip
 };
 
+// How far a preview's bodies (an unsolved iterate) are washed towards grey.
+inline constexpr float kPreviewWash = 0.65f;
+
 struct RenderOptions {
   double time = 0;
   int ghosts = 2;             // onion-skin frames on each side of the current time
