@@ -751,7 +751,30 @@ int nestingDepth(const std::string& text) {
 
 }  // namespace
 
+namespace {
+// An error as one line of at most kMaxErrorLength bytes, cut at a character boundary: the JSON
+// library quotes what it last read ("last read: '...'"), which can be a whole line of the file
+// (found by the loader's fuzzer: a 400-character message).
+constexpr size_t kMaxErrorLength = 300;
+std::string oneLine(std::string message) {
+  for (char& c : message)
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  if (message.size() <= kMaxErrorLength) return message;
+  size_t cut = kMaxErrorLength - 3;
+  while (cut > 0 && (static_cast<unsigned char>(message[cut]) & 0xC0) == 0x80) --cut;  // not inside a character
+  return message.substr(0, cut) + "...";
+}
+SceneLoadResult parseSceneText(const std::string& text, const std::string& sourceName);
+}  // namespace
+
 SceneLoadResult parseScene(const std::string& text, const std::string& sourceName) {
+  SceneLoadResult result = parseSceneText(text, sourceName);
+  if (!result.scene) result.error = oneLine(std::move(result.error));
+  return result;
+}
+
+namespace {
+SceneLoadResult parseSceneText(const std::string& text, const std::string& sourceName) {
   constexpr int kMaxNesting = 64;  // a scene needs 6
   SceneLoadResult result;
   if (const int depth = nestingDepth(text); depth > kMaxNesting) {
@@ -775,6 +798,7 @@ SceneLoadResult parseScene(const std::string& text, const std::string& sourceNam
   }
   return result;
 }
+}  // namespace
 
 SceneLoadResult loadSceneFile(const std::string& path) {
   std::string text, error;

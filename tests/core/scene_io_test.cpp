@@ -175,5 +175,27 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
   EXPECT_NE(missing.error.find("/no/such/scene.json"), std::string::npos);
 }
 
+// Found by the loader's fuzzer (tests/fuzz): the JSON library quotes what it last read, which
+// can be a long line of the file; every error stays one line of at most 300 characters, cut at a
+// character boundary.
+TEST(SceneIo, EveryErrorIsOneShortLine) {
+  const std::string longKey = "{\"" + std::string(400, 'M') + "\u00e9" + "\n";
+  for (const std::string& text : {longKey, "{\"characters\": [" + std::string(500, ' ') + "\u00e9\u00e9\u00e9" + std::string(500, 'x')}) {
+    const SceneLoadResult r = parseScene(text, "fuzz.json");
+    ASSERT_FALSE(r.scene);
+    EXPECT_LE(r.error.size(), 300u) << r.error;
+    EXPECT_EQ(r.error.find('\n'), std::string::npos) << r.error;
+    EXPECT_EQ(r.error.rfind("fuzz.json: not valid JSON", 0), 0u) << r.error;
+    // Valid UTF-8 at the cut: no lead byte without its continuation bytes at the end.
+    size_t i = r.error.size();
+    while (i > 0 && (static_cast<unsigned char>(r.error[i - 1]) & 0xC0) == 0x80) --i;
+    if (i > 0) {
+      const unsigned char lead = static_cast<unsigned char>(r.error[i - 1]);
+      const size_t need = lead < 0x80 ? 1 : lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : 2;
+      EXPECT_EQ(r.error.size() - (i - 1), need) << r.error;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace spacetime
