@@ -557,6 +557,22 @@ class EditorTest : public QObject {
     QVERIFY(form->message().isEmpty());
   }
 
+  // Removing a body with a subtree says what went with it; one undo brings it all back.
+  void removingABodySaysWhatWentWithIt() {
+    MainWindow w;
+    QVERIFY(openLuxo(w));
+    w.setAutoSolve(false);
+    Document& doc = *w.document();
+    const std::string before = json(doc);
+    doc.selectBody(0, "lower_arm");
+    w.builder()->removeBody();
+    QCOMPARE(doc.scene().characters[0].bodies.size(), size_t(1));
+    QVERIFY2(w.statusText().contains("Removed 'lower_arm', 2 bodies under it"), qPrintable(w.statusText()));
+    QVERIFY2(w.statusText().contains("Ctrl+Z"), qPrintable(w.statusText()));
+    doc.undoStack()->undo();
+    QCOMPARE(json(doc), before);
+  }
+
   // Open Recent lists a file once however its path was spelled.
   void openRecentListsAFileOnce() {
     QTemporaryDir dir;

@@ -344,6 +344,9 @@ void BuilderPanel::removeBody() {
   if (id.empty() || findBody(s, c, id)->parent.empty()) {
     // The root body (or the character itself): remove the whole character and its terms.
     const std::string cid = s.characters[c].id;
+    const auto terms = std::count_if(s.terms.begin(), s.terms.end(), [&](const TermSpec& t) { return t.character == cid; });
+    emit said(tr("Removed character '%1' with its %2 bodies and %3 terms (Ctrl+Z brings them back)")
+                  .arg(QString::fromStdString(cid)).arg(s.characters[c].bodies.size()).arg(terms));
     doc_->edit(tr("Remove character"), [&](Scene& sc) {
       sc.characters.erase(sc.characters.begin() + c);
       std::erase_if(sc.terms, [&](const TermSpec& t) { return t.character == cid; });
@@ -359,6 +362,12 @@ void BuilderPanel::removeBody() {
     if (doomed.count(b.id)) joints.insert(b.joint.id);
   const std::string cid = s.characters[c].id;
   const std::string parent = findBody(s, c, id)->parent;
+  // Removing is undoable, so it does not ask; it says what went with the body, which a subtree
+  // hides (the status bar: "Removed 'upper_arm', 1 body under it and 2 terms (Ctrl+Z ...)").
+  const auto terms = std::count_if(s.terms.begin(), s.terms.end(),
+                                   [&](const TermSpec& t) { return t.character == cid && doomed.count(t.body) > 0; });
+  emit said(tr("Removed '%1', %2 bodies under it and %3 terms on them (Ctrl+Z brings them back)")
+                .arg(QString::fromStdString(id)).arg(doomed.size() - 1).arg(terms));
   doc_->edit(tr("Remove body"), [&](Scene& sc) {
     std::erase_if(sc.characters[c].bodies, [&](const BodySpec& b) { return doomed.count(b.id) > 0; });
     std::erase_if(sc.terms, [&](const TermSpec& t) { return t.character == cid && doomed.count(t.body) > 0; });

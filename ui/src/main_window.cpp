@@ -58,6 +58,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     return d;
   };
   builder_ = new BuilderPanel(&doc_);
+  connect(builder_, &BuilderPanel::said, this, [this](const QString& m) { progress_->setText(m); });
   constraints_ = new ConstraintsPanel(&doc_);
   timeline_ = new Timeline(&doc_);
   graphs_ = new GraphPanel(&doc_);

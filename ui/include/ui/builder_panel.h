@@ -25,6 +25,10 @@ class BuilderPanel : public QWidget {
   QTreeWidget* tree() const { return tree_; }
   PropertyForm* form() const { return form_; }
 
+ signals:
+  // What a command did beyond the obvious (a removal's subtree and terms), for the status bar.
+  void said(const QString& message);
+
  private:
   void rebuildTree();
   void rebuildForm();
