@@ -749,9 +749,6 @@ int nestingDepth(const std::string& text) {
   return deepest;
 }
 
-}  // namespace
-
-namespace {
 // An error as one line of at most kMaxErrorLength bytes, cut at a character boundary: the JSON
 // library quotes what it last read ("last read: '...'"), which can be a whole line of the file
 // (found by the loader's fuzzer: a 400-character message).
@@ -764,16 +761,8 @@ std::string oneLine(std::string message) {
   while (cut > 0 && (static_cast<unsigned char>(message[cut]) & 0xC0) == 0x80) --cut;  // not inside a character
   return message.substr(0, cut) + "...";
 }
-SceneLoadResult parseSceneText(const std::string& text, const std::string& sourceName);
-}  // namespace
 
-SceneLoadResult parseScene(const std::string& text, const std::string& sourceName) {
-  SceneLoadResult result = parseSceneText(text, sourceName);
-  if (!result.scene) result.error = oneLine(std::move(result.error));
-  return result;
-}
-
-namespace {
+// The scene in `text`, or its error as the reader words it (parseScene makes it one short line).
 SceneLoadResult parseSceneText(const std::string& text, const std::string& sourceName) {
   constexpr int kMaxNesting = 64;  // a scene needs 6
   SceneLoadResult result;
@@ -798,7 +787,14 @@ SceneLoadResult parseSceneText(const std::string& text, const std::string& sourc
   }
   return result;
 }
+
 }  // namespace
+
+SceneLoadResult parseScene(const std::string& text, const std::string& sourceName) {
+  SceneLoadResult result = parseSceneText(text, sourceName);
+  if (!result.scene) result.error = oneLine(std::move(result.error));
+  return result;
+}
 
 SceneLoadResult loadSceneFile(const std::string& path) {
   std::string text, error;

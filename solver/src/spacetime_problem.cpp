@@ -916,11 +916,11 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
       times.erase(std::unique(times.begin(), times.end(), [](double a, double b) { return b - a <= kTimeTolerance; }),
                   times.end());
     }
+    const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
+    const double scale = t.relation == '>' ? -1.0 : 1.0;
+    const std::string source = "term '" + t.id + "': formula \"" + t.expression + "\"";
     for (double time : times) {
       std::string why;
-      const RowKind kind = t.relation == '=' ? RowKind::Equality : RowKind::Inequality;
-      const double scale = t.relation == '>' ? -1.0 : 1.0;
-      const std::string source = "term '" + t.id + "': formula \"" + t.expression + "\"";
       if (!addFormula(c, time, t.expression, kind, scale, t.value, at(label, time), source, &why)) {
         *error = source + ": " + why;
         return false;
@@ -929,10 +929,10 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
   }
   for (const FormulaObjective& f : scene_.objective.formulas) {
     const int c = characterIndex(f.character);
+    const std::string source = "objective formula \"" + f.expression + "\"";
     for (const Sample& s : transcription_.samples) {
       if (s.weight <= 0 || f.weight <= 0 || !s.appliesTo(f.character)) continue;
       std::string why;
-      const std::string source = "objective formula \"" + f.expression + "\"";
       if (!addFormula(c, s.time, f.expression, RowKind::Objective, std::sqrt(f.weight * s.weight), 0.0,
                       at("objective formula", s.time), source, &why)) {
         *error = source + ": " + why;

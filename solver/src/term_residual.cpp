@@ -107,20 +107,19 @@ void TermResidual::scaleObjective(double scale, double* rows) const {
     if (kinds[r] == RowKind::Objective) rows[r] *= scale;
 }
 
-void TermResidual::rawRows(double const* const* parameters, double* rows) const {
-  const Map m = map(parameters);
+Eigen::VectorXd TermResidual::inputs(const Map& m, double const* const* parameters) const {
   Eigen::VectorXd z(kernel_->inputSize());
   matrix(m).apply(stacked(parameters).data(), z.data());
-  kernel_->evaluate(z.data(), rows);
+  return z;
+}
+
+void TermResidual::rawRows(double const* const* parameters, double* rows) const {
+  const Map m = map(parameters);
+  kernel_->evaluate(inputs(m, parameters).data(), rows);
   scaleObjective(m.scale, rows);
 }
 
-Eigen::VectorXd TermResidual::inputsNow() const {
-  const Map m = map(blocks_.data());
-  Eigen::VectorXd z(kernel_->inputSize());
-  matrix(m).apply(stacked(blocks_.data()).data(), z.data());
-  return z;
-}
+Eigen::VectorXd TermResidual::inputsNow() const { return inputs(map(blocks_.data()), blocks_.data()); }
 
 std::vector<double> TermResidual::rawRowsNow() const {
   std::vector<double> rows(kernel_->rowCount());

@@ -304,8 +304,7 @@ std::string ConstraintsPanel::addPin() {
   pin.body = body;
   pin.time = t;
   // The body's tip (a hand, a head), not its origin, which is the joint.
-  for (const BodySpec& b : doc_->scene().characters[c].bodies)
-    if (b.id == body) pin.point = geometryTip(b.geometry);
+  if (const BodySpec* b = doc_->scene().characters[c].body(body)) pin.point = geometryTip(b->geometry);
   pin.position = bodyToWorld(model, q, model.bodyIndex(body), pin.point);
   if (doc_->scene().characters[c].root == RootKind::Planar) pin.axes = {true, true, false};
   return addTerm(tr("Add pin"), pin);
@@ -343,8 +342,8 @@ std::string ConstraintsPanel::addContact() {
   // The bottom of the body's geometry: a box's base corners (two for a planar character, which
   // one point would leave pivoting), a sphere's lowest point.
   contact.points = {Eigen::Vector3d::Zero()};
-  for (const BodySpec& b : s.characters[c].bodies)
-    if (b.id == body) contact.points = geometryBaseCorners(b.geometry, s.characters[c].root == RootKind::Planar);
+  if (const BodySpec* b = s.characters[c].body(body))
+    contact.points = geometryBaseCorners(b->geometry, s.characters[c].root == RootKind::Planar);
   const double span = 0.2 * (s.endTime - s.startTime);
   contact.start = std::max(s.startTime, doc_->currentTime() - span / 2);
   contact.end = std::min(s.endTime, contact.start + span);

@@ -576,7 +576,7 @@ void MainWindow::addRecent(const QString& path) {
   const QString file = canonical(path);
   QStringList recent;
   for (const QString& p : settings.value("recentFiles").toStringList())
-    if (canonical(p) != file && !recent.contains(canonical(p))) recent.append(canonical(p));
+    if (const QString other = canonical(p); other != file && !recent.contains(other)) recent.append(other);
   recent.prepend(file);
   while (recent.size() > 10) recent.removeLast();
   settings.setValue("recentFiles", recent);

@@ -127,6 +127,7 @@ class TermResidual : public ceres::CostFunction {
   // B: the constant map, or a moving residual's B(T).
   const SparseMap& matrix(const Map& m) const { return moving_ ? m.moved : B_; }
   Map map(double const* const* parameters) const;
+  Eigen::VectorXd inputs(const Map& m, double const* const* parameters) const;  // z = B p
   Eigen::VectorXd stacked(double const* const* parameters) const;  // p: the blocks but T
   void stackInto(double const* const* parameters, double* p) const;  // the same into p
   void indexColumns(const std::vector<int>& sizes);  // fills colBlock_, colIndex_
