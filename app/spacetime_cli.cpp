@@ -33,7 +33,8 @@ namespace {
 
 #define SPACETIME_CLI_USAGE \
   "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet]\n" \
-  "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n"
+  "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n" \
+  "                          [--method al|ipopt]\n"
 
 constexpr const char* kHelp =
     SPACETIME_CLI_USAGE
@@ -45,6 +46,8 @@ constexpr const char* kHelp =
     "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
     "  --quiet            no progress on stderr\n"
     "  --no-polish        the augmented Lagrangian without the Newton polish\n"
+    "  --method M         al: augmented Lagrangian with Newton polish; ipopt: IPOPT's interior\n"
+    "                     point with exact Hessians (default: the scene's solver.method, else al)\n"
     "  --max-refinements N  finer transcriptions tried when the motion fails the validity report\n"
     "                     or the solve stalls (default 3; 0: only the scene's transcription)\n"
     "  --init SOLVED.json start from the solution stored in a scene: DIR/scene.json of an earlier\n"
@@ -92,6 +95,7 @@ int run(int argc, char** argv) {
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
   RefinementOptions refinement;
   std::string initPath;  // --init: a scene holding a stored solution
+  std::string method;    // --method: overrides the scene's solver.method
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) outDir = argv[++i];
@@ -117,6 +121,11 @@ int run(int argc, char** argv) {
       refinement.maxRefinements = static_cast<int>(n);
     }
     else if (a == "--init" && i + 1 < argc) initPath = argv[++i];
+    else if (a == "--method" && i + 1 < argc) {
+      method = argv[++i];
+      SolverMethod m;
+      if (!parseSolverMethod(method, &m)) return usage("--method must be al or ipopt");
+    }
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (scenePath.empty()) scenePath = a;
     else return usage(("unexpected argument " + a).c_str());
@@ -161,6 +170,7 @@ int run(int argc, char** argv) {
   options.maxSeconds = maxSeconds;
   options.spentSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   options.newtonPolish = polish;
+  if (!method.empty()) parseSolverMethod(method, &options.method);
   if (start) {
     const StoredSolution& s = *start->solution;
     const SpacetimeProblem::WarmStart how = problem->warmStartFrom(*start, {s.variables, s.multipliers, s.rho});

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages Spacetime needs, only those that are missing, and the Khronos
 # glTF Validator (npm) the tests check exported glTF with, into .cache/ (not committed). clang is
-# for the scene loader's fuzzer (scripts/fuzz.sh, and a 60 s run in the tests).
+# for the scene loader's fuzzer (scripts/fuzz.sh, and a 60 s run in the tests); IPOPT
+# (coinor-libipopt-dev) for the interior-point method (`--method ipopt`).
 set -euo pipefail
 packages=(cmake ninja-build g++ clang ccache pkg-config
-          libeigen3-dev libceres-dev nlohmann-json3-dev
+          libeigen3-dev libceres-dev nlohmann-json3-dev coinor-libipopt-dev
           libgtest-dev libbenchmark-dev libmujoco-dev libtinygltf-dev
           qt6-base-dev libqt6opengl6-dev qt6-charts-dev libglm-dev libgl-dev
           xvfb xauth)

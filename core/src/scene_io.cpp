@@ -520,8 +520,14 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("solver")) {
     const json& t = root["solver"];
-    r.allowKeys(t, "solver", {"maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty",
+    r.allowKeys(t, "solver", {"method", "maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty",
                                   "bodiesAboveGround"});
+    if (t.contains("method")) {
+      s.solver.method = r.string(t["method"], "solver.method");
+      if (std::find(std::begin(SolverSpec::kMethods), std::end(SolverSpec::kMethods), s.solver.method) ==
+          std::end(SolverSpec::kMethods))
+        r.badValue("solver.method", t["method"], "\"al\" or \"ipopt\"");
+    }
     if (t.contains("bodiesAboveGround"))
       s.solver.bodiesAboveGround = r.boolean(t["bodiesAboveGround"], "solver.bodiesAboveGround");
     if (t.contains("maxOuterIterations"))
@@ -813,7 +819,8 @@ std::string sceneToJson(const Scene& s) {
   root["ground"] = {{"enabled", s.groundEnabled}, {"height", s.groundHeight}};
   root["transcription"] = {{"controlPointsPerSecond", s.transcription.controlPointsPerSecond},
                            {"samplesPerSegment", s.transcription.samplesPerSegment}};
-  root["solver"] = {{"maxOuterIterations", s.solver.maxOuterIterations},
+  root["solver"] = {{"method", s.solver.method},
+                    {"maxOuterIterations", s.solver.maxOuterIterations},
                     {"maxInnerIterations", s.solver.maxInnerIterations},
                     {"tolerance", s.solver.tolerance},
                     {"maxPenalty", s.solver.maxPenalty},

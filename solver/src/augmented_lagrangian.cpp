@@ -8,6 +8,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "solver/interior_point.h"
 #include "solver/newton_polish.h"
 
 namespace spacetime {
@@ -87,6 +88,7 @@ SolverOptions solverOptionsFor(const SolverSpec& spec) {
   options.maxInnerIterations = spec.maxInnerIterations;
   options.tolerance = spec.tolerance;
   options.maxPenalty = spec.maxPenalty;
+  parseSolverMethod(spec.method, &options.method);  // the loader accepts only known names
   return options;
 }
 
@@ -120,6 +122,19 @@ std::string toString(SolveStatus s) {
     case SolveStatus::InvalidOptions: return "invalid options";
   }
   return "?";
+}
+
+std::string toString(SolverMethod m) {
+  return m == SolverMethod::InteriorPoint ? "ipopt" : "al";
+}
+
+bool parseSolverMethod(const std::string& name, SolverMethod* method) {
+  for (SolverMethod m : {SolverMethod::AugmentedLagrangian, SolverMethod::InteriorPoint})
+    if (name == toString(m)) {
+      *method = m;
+      return true;
+    }
+  return false;
 }
 
 namespace {
@@ -190,6 +205,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     summary.reason = "invalid solver options: " + err;
     return summary;
   }
+  if (options.method == SolverMethod::InteriorPoint) return solveInteriorPoint(problem, options, callback, cancel);
   AugmentedLagrangianState& al = problem.augmentedLagrangian();
   if (!options.warmStart || !(al.rho > 0)) {
     std::fill(al.lambda.begin(), al.lambda.end(), 0.0);

@@ -38,6 +38,7 @@ json rows(const Eigen::MatrixXd& m) {
 std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
                         const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts) {
   json j;
+  j["method"] = toString(s.method);
   j["converged"] = s.converged;
   j["status"] = toString(s.status);
   j["reason"] = s.reason;

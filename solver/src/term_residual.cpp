@@ -145,6 +145,15 @@ Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w) const {
   return H;
 }
 
+std::vector<int> TermResidual::nonlinearColumns() const {
+  std::vector<int> cols;
+  for (const SparseMap::Entry& e : B_.entries)
+    if (e.row < kernel_->nonlinearInputs()) cols.push_back(e.col);
+  std::sort(cols.begin(), cols.end());
+  cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+  return cols;
+}
+
 bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
                             double** jacobians) const {
   // Ceres calls this for every residual block of every iteration from its worker threads: the

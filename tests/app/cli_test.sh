@@ -18,6 +18,22 @@ for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_s
   grep -q "$key" "$tmp/good/summary.json" || fail "summary.json lacks $key"
 done
 
+# The interior-point method (IPOPT) from the command line and from the scene's solver block; an
+# unknown method is bad input.
+"$cli" solve "$scenes/particle.json" --out "$tmp/ip" --method ipopt --quiet 2>"$tmp/ip.err" || fail "--method ipopt exited $?: $(cat "$tmp/ip.err")"
+grep -q '"method": "ipopt"' "$tmp/ip/summary.json" || fail "summary.json does not name the method ipopt"
+grep -q '"valid": true' "$tmp/ip/summary.json" || fail "--method ipopt: the particle is not valid"
+grep -q '"method": "al"' "$tmp/good/summary.json" || fail "summary.json does not name the default method al"
+python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); s.setdefault("solver", {})["method"] = "ipopt"; json.dump(s, open(sys.argv[2], "w"))' \
+  "$scenes/particle.json" "$tmp/ip_scene.json" || fail "could not make the ipopt scene"
+"$cli" solve "$tmp/ip_scene.json" --out "$tmp/ip_scene" --quiet 2>/dev/null || fail "solver.method ipopt exited $?"
+grep -q '"method": "ipopt"' "$tmp/ip_scene/summary.json" || fail "the scene's solver.method was not used"
+"$cli" solve "$tmp/ip_scene.json" --out "$tmp/ip_override" --method al --quiet 2>/dev/null || fail "--method al exited $?"
+grep -q '"method": "al"' "$tmp/ip_override/summary.json" || fail "--method al did not override the scene"
+"$cli" solve "$scenes/particle.json" --out "$tmp/nomethod" --method newton 2>"$tmp/nomethod.err"; status=$?
+[ "$status" -eq 2 ] || fail "--method newton exited $status, expected 2"
+grep -q -- "--method must be al or ipopt" "$tmp/nomethod.err" || fail "unclear --method error: $(cat "$tmp/nomethod.err")"
+
 sed 's/"mass": 1.0/"mass": -1.0/' "$scenes/particle.json" > "$tmp/bad.json"
 "$cli" solve "$tmp/bad.json" --out "$tmp/bad" --quiet 2>"$tmp/bad.err"
 status=$?

@@ -23,6 +23,15 @@ namespace {
 // and the Newton polish's steps (the Hessian, the factorisation with its inertia correction,
 // the line search's trial points).
 void reportSteps(benchmark::State& state, const SolverSummary& s) {
+  if (s.method == SolverMethod::InteriorPoint) {  // IPOPT's iterations: evaluation, Hessian, the rest
+    state.counters["ip_iterations"] = s.iterations;
+    if (s.iterations > 0 && s.solveSeconds > 0) {
+      state.counters["ip_ms_per_iteration"] = 1e3 * s.solveSeconds / s.iterations;
+      state.counters["ip_evaluation_share"] = s.jacobianSeconds / s.solveSeconds;
+      state.counters["ip_hessian_share"] = s.hessianSeconds / s.solveSeconds;
+    }
+    return;
+  }
   state.counters["lm_iterations"] = s.iterations;
   state.counters["newton_steps"] = s.newtonSteps;
   const double lmSeconds = s.solveSeconds - s.polishSeconds;
@@ -42,9 +51,10 @@ void reportSteps(benchmark::State& state, const SolverSummary& s) {
 // With samplesPerSegment > 0 the scene's transcription is overridden (2: a coarser transcription,
 // which converges but fails the dense-grid check); polish = false runs the augmented Lagrangian
 // without its Newton polish, to measure what the polish saves; threads = 2 is what spacetime-cli
-// uses on this 2-core machine (the other rows are single-threaded, as the editor's solver).
+// uses on this 2-core machine (the other rows are single-threaded, as the editor's solver);
+// method: the interior point (IPOPT) rows compare it with the default.
 void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSegment = 0,
-              bool polish = true, int threads = 1) {
+              bool polish = true, int threads = 1, SolverMethod method = SolverMethod::AugmentedLagrangian) {
   // "test:NAME" is a scene kept for tests only (tests/scenes/).
   Scene scene = name.rfind("test:", 0) == 0 ? testing::testScene(name.substr(5)) : testing::shippedScene(name);
   if (samplesPerSegment > 0) scene.transcription.samplesPerSegment = samplesPerSegment;
@@ -60,6 +70,7 @@ void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSe
     options.maxSeconds = 120;
     options.newtonPolish = polish;
     options.threads = threads;
+    options.method = method;
     last = solveSpacetime(*problem, options);
     converged = converged && last.converged;
     violation = std::max(violation, last.maxViolation);
@@ -156,6 +167,9 @@ BENCHMARK_CAPTURE(BM_Solve, luxo_jump_2_samples, std::string("luxo_jump.json"), 
 BENCHMARK_CAPTURE(BM_Solve, luxo_3d, std::string("luxo_3d.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 // The same lamp rooted at its head: its contacts are on a leaf body, so no held stance applies.
 BENCHMARK_CAPTURE(BM_Solve, luxo_head_root_2_threads, std::string("test:luxo_head_root.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, particle_ipopt, std::string("particle.json"), 0, true, 1, SolverMethod::InteriorPoint)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Solve, luxo_jump_ipopt_2_threads, std::string("luxo_jump.json"), 0, true, 2, SolverMethod::InteriorPoint)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, luxo_hurdle_ipopt_2_threads, std::string("luxo_hurdle.json"), 0, true, 2, SolverMethod::InteriorPoint)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm, true)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_without_polish, false)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm, true, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

@@ -51,6 +51,18 @@ TEST(SceneIo, FreeContactEndRoundTrips) {
   EXPECT_EQ(free, 1);
 }
 
+// The solver method a scene asks for is saved and read back.
+TEST(SceneIo, SolverMethodRoundTrips) {
+  const SceneLoadResult r = loadSceneFile(std::string(kScenes) + "/luxo_jump.json");
+  ASSERT_TRUE(r.scene) << r.error;
+  EXPECT_EQ(r.scene->solver.method, "al");  // the default
+  Scene scene = *r.scene;
+  scene.solver.method = "ipopt";
+  const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
+  ASSERT_TRUE(again.scene) << again.error;
+  EXPECT_EQ(again.scene->solver.method, "ipopt");
+}
+
 // A joint axis beyond the loader's magnitude bound is refused, naming the component (its
 // squared norm overflowed a double and it became [0, 0, 0]: the solve failed and the saved file
 // would not load again); a large one within the bound normalises to its direction.
@@ -147,6 +159,7 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
       {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
+      {minimalWith(body, "[]", R"("solver": {"method": "sqp2"},)"), "solver.method': value \"sqp2\" is not allowed; expected \"al\" or \"ipopt\""},
       // A number beyond a double (nlohmann's out_of_range, which used to abort).
       {minimalWith(R"({"id": "base", "mass": 1e999})"), "not valid JSON"},
       // 100 000 levels of nesting (parsing and printing them overflowed the stack), and a few

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "../shipped_scene.h"
+#include "particle_optimum.h"
 #include "split_landing.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/newton_polish.h"
@@ -111,20 +112,9 @@ TEST(NewtonPolish, ParticleLandsOnTheAnalyticMinimumInOneStep) {
     EXPECT_TRUE(s.polished) << s.reason;
     EXPECT_EQ(s.newtonSteps, 1) << name;
     EXPECT_EQ(s.iterations, 0) << name;
-    // Seed Figure 7 without gravity: h = 1/2, m = 1; per axis 2 h M1^2 / 3 with
-    // M1 = 6 (y0 - 2 y1 + y2) / (4 h^2) (particle_test.cpp derives it); x, y, z: 432 + 0 + 12.
-    // With gravity the same formula on y - g t^2 / 2 (particle_test.cpp's analyticParticleMinimum).
-    double expected = optimum;
-    if (expected == 0) {
-      const double h = 0.5;
-      const Eigen::Vector3d p[3] = {{0, 0, 0}, {2, 1, 1}, {-2, 2, 1}};
-      for (int axis = 0; axis < 3; ++axis) {
-        double y[3];
-        for (int i = 0; i < 3; ++i) y[i] = p[i][axis] - scene.gravity[axis] * (i * h) * (i * h) / 2;
-        const double M1 = 6 * (y[0] - 2 * y[1] + y[2]) / (4 * h * h);
-        expected += 2 * h * M1 * M1 / 3;
-      }
-    }
+    // Seed Figure 7 (particle_optimum.h): 432 + 0 + 12 without gravity.
+    const double expected = testing::analyticParticleMinimum(scene);
+    EXPECT_NEAR(expected, optimum == 0 ? expected : optimum, 1e-12);
     EXPECT_NEAR(s.objective, expected, expected * 1e-9) << name;
     EXPECT_LT(s.maxViolation, 1e-9) << name;
   }

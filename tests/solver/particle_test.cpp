@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "../shipped_scene.h"
+#include "particle_optimum.h"
 #include "perturbed.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
@@ -23,21 +24,7 @@
 namespace spacetime {
 namespace {
 
-double analyticParticleMinimum(const Scene& scene) {
-  const double h = 0.5, m = 1.0;
-  const Eigen::Vector3d p[3] = {{0, 0, 0}, {2, 1, 1}, {-2, 2, 1}};
-  double total = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    double y[3];
-    for (int i = 0; i < 3; ++i) {
-      const double t = i * h;
-      y[i] = p[i][axis] - scene.gravity[axis] * t * t / 2;
-    }
-    const double M1 = 6 * (y[0] - 2 * y[1] + y[2]) / (4 * h * h);
-    total += m * m * 2 * h * M1 * M1 / 3;
-  }
-  return total;
-}
+using testing::analyticParticleMinimum;
 
 class Particle : public ::testing::TestWithParam<const char*> {};
 

@@ -33,6 +33,7 @@
 
 #include "core/scene_io.h"
 #include "core/shape_mesh.h"
+#include "solver/interior_point.h"
 #include "ui/main_window.h"
 #include "ui/render_scene.h"
 #include "ui/solved_motion.h"
@@ -639,16 +640,21 @@ class EditorTest : public QObject {
     QVERIFY(samples);
     samples->setCurrentIndex(3);
     QCOMPARE(doc.scene().transcription.samplesPerSegment, 4);
-    QCOMPARE(doc.undoStack()->count(), commands + 6);
+    auto* method = qobject_cast<QComboBox*>(form->editor("Solver method"));
+    QVERIFY(method);
+    method->setCurrentIndex(1);
+    QCOMPARE(doc.scene().solver.method, std::string("ipopt"));
+    QCOMPARE(doc.undoStack()->count(), commands + 7);
     end->setValue(-5);  // before the start: kept after it
     QVERIFY(doc.scene().endTime > doc.scene().startTime);
     QCOMPARE(end->value(), doc.scene().endTime);
     doc.undoStack()->undo();
     QCOMPARE(doc.scene().endTime, 2.5);
-    // The edited scene solves (the particle over 2.5 s under moon gravity).
+    // The edited scene solves (the particle over 2.5 s under moon gravity), with the method chosen.
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(60000));
     QVERIFY2(doc.motion() && doc.motion()->converged, qPrintable(w.statusText()));
+    if (interiorPointAvailable()) QVERIFY2(w.statusText().contains("interior-point"), qPrintable(w.statusText()));
     while (doc.undoStack()->canUndo() && doc.undoStack()->index() > commands) doc.undoStack()->undo();
     QCOMPARE(doc.scene().endTime, 1.0);
     QCOMPARE(end->value(), 1.0);

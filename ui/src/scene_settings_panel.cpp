@@ -48,6 +48,10 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
   for (int k = 1; k <= TranscriptionSpec::kMaxSamplesPerSegment; ++k) samples << QString::number(k);
   f.addChoice(tr("Samples per segment"), samples, [](const Scene& s) { return s.transcription.samplesPerSegment - 1; },
               [](Scene& s, int v) { s.transcription.samplesPerSegment = v + 1; });
+  // SolverSpec::kMethods in order: "al", "ipopt".
+  f.addChoice(tr("Solver method"), {tr("augmented Lagrangian"), tr("interior point (IPOPT)")},
+              [](const Scene& s) { return s.solver.method == "ipopt" ? 1 : 0; },
+              [](Scene& s, int v) { s.solver.method = SolverSpec::kMethods[v]; });
   f.addDouble(tr("Solver tolerance"), [](const Scene& s) { return s.solver.tolerance; },
               [](Scene& s, double v) { s.solver.tolerance = v; }, 1e-10, 1e-2, 1e-7, 10);
   f.addDouble(tr("Most multiplier updates"), [](const Scene& s) { return double(s.solver.maxOuterIterations); },

@@ -155,6 +155,10 @@ struct TranscriptionSpec {
 };
 
 struct SolverSpec {
+  // The method (solver/augmented_lagrangian.h, SolverMethod): "al", the augmented Lagrangian
+  // with Newton polish, or "ipopt", the interior point through IPOPT.
+  static constexpr const char* kMethods[] = {"al", "ipopt"};
+  std::string method = "al";
   int maxOuterIterations = 30;
   int maxInnerIterations = 60;
   double tolerance = 1e-7;  // on scaled constraint rows (metres, radians, fraction of weight)

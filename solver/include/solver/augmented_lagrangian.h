@@ -18,7 +18,12 @@
 
 namespace spacetime {
 
+// The method that solves the problem: the augmented Lagrangian with Newton polish (the
+// default), or the interior-point method through IPOPT (interior_point.h) where it is built.
+enum class SolverMethod { AugmentedLagrangian, InteriorPoint };
+
 struct SolverOptions {
+  SolverMethod method = SolverMethod::AugmentedLagrangian;
   int maxOuterIterations = 30;   // multiplier updates
   int maxInnerIterations = 60;   // Levenberg-Marquardt iterations per outer iteration
   int maxProjectionIterations = 50;  // Gauss-Newton iterations of the final projection
@@ -97,6 +102,7 @@ struct ViolatedConstraint {
 };
 
 struct SolverSummary {
+  SolverMethod method = SolverMethod::AugmentedLagrangian;  // the method that ran
   SolveStatus status = SolveStatus::InvalidOptions;
   bool converged = false;
   std::string reason;
@@ -109,7 +115,7 @@ struct SolverSummary {
   // unmet rows' gradients cancel.
   std::vector<ViolatedConstraint> violated;
   int outerIterations = 0;
-  int iterations = 0;           // total Levenberg-Marquardt iterations
+  int iterations = 0;           // total Levenberg-Marquardt (interior point: IPOPT) iterations
   int newtonSteps = 0;          // of the Newton polish, whether it succeeded or not
   bool polished = false;        // the result is the Newton polish's KKT point
   double solveSeconds = 0;
@@ -144,5 +150,8 @@ ProblemMeasures measure(const SpacetimeProblem& problem);
 std::vector<ViolatedConstraint> mostViolated(const SpacetimeProblem& problem, double floor, int limit);
 
 std::string toString(SolveStatus s);
+std::string toString(SolverMethod m);  // "al", "ipopt": the names the CLI and scenes use
+// The method with that name; false if there is none.
+bool parseSolverMethod(const std::string& name, SolverMethod* method);
 
 }  // namespace spacetime

@@ -112,6 +112,9 @@ class TermResidual : public ceres::CostFunction {
   // B^T H_z B at the parameters' current values: the Hessian, in the stacked parameter blocks,
   // of sum_r w[r] raw row r (Kernel::weightedHessian). Not for moving residuals.
   Eigen::MatrixXd weightedHessianNow(const double* w) const;
+  // The stacked parameter columns the kernel's nonlinear inputs read, sorted: where
+  // weightedHessianNow can be nonzero (rows and columns).
+  std::vector<int> nonlinearColumns() const;
 
   const Kernel& kernel() const { return *kernel_; }
   const std::vector<double*>& blocks() const { return blocks_; }
