@@ -31,6 +31,10 @@ for b in rows:
     steps = ""
     if "lm_iterations" in b:
         steps = f"{b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}"
+    elif "ip_iterations" in b:  # the interior point (IPOPT): its iterations and their cost
+        steps = f"{b['ip_iterations']:.0f} IPOPT iterations"
+        if b.get("ip_ms_per_iteration"):
+            steps += f", {b['ip_ms_per_iteration']:.1f} ms each (evaluation {100 * b['ip_evaluation_share']:.0f} %, Hessian {100 * b['ip_hessian_share']:.0f} %)"
     elif "rows" in b:
         steps = f"{b['rows']:.0f} rows x {b['cols']:.0f} columns"
     conv = {1: "yes", 0: "no"}.get(b.get("converged", b.get("valid")), "")

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <unordered_map>
 
@@ -280,7 +281,7 @@ class SpacetimeNlp : public Ipopt::TNLP {
   Clock::time_point deadline_;
   Clock::time_point lastReport_ = Clock::now();
   const std::vector<double> start_;
-  std::vector<int> objective_, constraint_;
+  std::vector<int> objective_, constraint_;  // rows of 1/2 |r|^2; rows held as constraints
   bool ok_ = false;
 
   Vec current_;
@@ -295,6 +296,26 @@ class SpacetimeNlp : public Ipopt::TNLP {
   Ipopt::SolverReturn status_ = Ipopt::UNASSIGNED;
   double evaluationSeconds_ = 0, hessianSeconds_ = 0;
 };
+
+// IPOPT's options for our problems; false if IPOPT cannot start.
+bool configure(Ipopt::IpoptApplication& app, const SolverOptions& options) {
+  app.Options()->SetIntegerValue("print_level", 0);
+  app.Options()->SetStringValue("sb", "yes");  // no banner
+  app.Options()->SetStringValue("hessian_approximation", "exact");
+  app.Options()->SetStringValue("mu_strategy", "adaptive");
+  app.Options()->SetNumericValue("tol", 1e-8);
+  app.Options()->SetNumericValue("constr_viol_tol", options.tolerance);
+  app.Options()->SetNumericValue("acceptable_constr_viol_tol", options.tolerance);
+  app.Options()->SetIntegerValue("max_iter", 3000);
+  // MUMPS with approximate minimum degree: the shipped jump 9.4 -> 6.6 s against its automatic
+  // choice (METIS 9.4 s); the adaptive barrier update takes 88 iterations, the monotone one 170.
+  app.Options()->SetIntegerValue("mumps_pivot_order", 0);
+  // IPOPT reads ./ipopt.opt by default, so a file in the working directory would change the
+  // solve unseen; only SPACETIME_IPOPT_OPTIONS names an options file (print_level 5, ...).
+  if (const char* file = std::getenv("SPACETIME_IPOPT_OPTIONS")) return app.Initialize(std::string(file)) == Ipopt::Solve_Succeeded;
+  std::istringstream none;
+  return app.Initialize(none) == Ipopt::Solve_Succeeded;
+}
 
 }  // namespace
 
@@ -334,19 +355,7 @@ SolverSummary solveInteriorPoint(SpacetimeProblem& problem, const SolverOptions&
   if (!nlp->ok()) return finish(SolveStatus::NumericalFailure, "a row is not finite at the starting motion");
 
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
-  app->Options()->SetIntegerValue("print_level", 0);
-  app->Options()->SetStringValue("sb", "yes");  // no banner
-  app->Options()->SetStringValue("hessian_approximation", "exact");
-  app->Options()->SetStringValue("mu_strategy", "adaptive");
-  app->Options()->SetNumericValue("tol", 1e-8);
-  app->Options()->SetNumericValue("constr_viol_tol", options.tolerance);
-  app->Options()->SetNumericValue("acceptable_constr_viol_tol", options.tolerance);
-  app->Options()->SetIntegerValue("max_iter", 3000);
-  // MUMPS with approximate minimum degree: the shipped jump 9.4 -> 6.6 s against its automatic
-  // choice (METIS 9.4 s); the adaptive barrier update takes 88 iterations, the monotone one 170.
-  app->Options()->SetIntegerValue("mumps_pivot_order", 0);
-  if (const char* level = std::getenv("SPACETIME_IPOPT_PRINT")) app->Options()->SetIntegerValue("print_level", std::atoi(level));
-  if (app->Initialize() != Ipopt::Solve_Succeeded)
+  if (!configure(*app, options))
     return finish(SolveStatus::InvalidOptions, "IPOPT could not be initialised");
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   summary.iterations = nlp->iterations();

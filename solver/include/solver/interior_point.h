@@ -12,6 +12,8 @@
 //
 // Built when Debian's coinor-libipopt-dev is installed (SPACETIME_HAVE_IPOPT); without it the
 // method reports that it is missing. Free contact ends (moving residuals) are not handed over.
+// IPOPT's own options file is read only when SPACETIME_IPOPT_OPTIONS names one (experiments:
+// print_level 5, print_timing_statistics yes), never ./ipopt.opt.
 #pragma once
 
 #include <atomic>
