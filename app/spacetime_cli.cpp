@@ -23,7 +23,7 @@
 
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
-#include "solver/outputs.h"
+#include "interop/outputs.h"
 #include "solver/refinement.h"
 #include "solver/validity.h"
 

@@ -12,7 +12,7 @@
 #include "core/scene_io.h"
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
-#include "dynamics/urdf_export.h"
+#include "interop/urdf_export.h"
 #include "random_model.h"
 
 namespace spacetime {

@@ -17,7 +17,7 @@
 #include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/ground_forces.h"
-#include "solver/outputs.h"
+#include "interop/outputs.h"
 #include "solver/validity.h"
 
 namespace spacetime {

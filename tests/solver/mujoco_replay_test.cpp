@@ -17,7 +17,7 @@
 #include "../mujoco_dofs.h"
 #include "../shipped_scene.h"
 #include "solver/augmented_lagrangian.h"
-#include "solver/outputs.h"
+#include "interop/outputs.h"
 #include "solver/validity.h"
 
 namespace spacetime {

@@ -7,9 +7,9 @@
 
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
-#include "dynamics/urdf_export.h"
+#include "interop/urdf_export.h"
 #include "solver/augmented_lagrangian.h"
-#include "solver/outputs.h"
+#include "interop/outputs.h"
 #include "solver/validity.h"
 
 namespace spacetime {

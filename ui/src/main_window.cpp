@@ -27,10 +27,10 @@
 #include "core/atomic_file.h"
 #include "core/scene_io.h"
 #include "dynamics/build_model.h"
-#include "dynamics/urdf_export.h"
-#include "solver/bvh_export.h"
-#include "solver/gltf_export.h"
-#include "solver/outputs.h"
+#include "interop/urdf_export.h"
+#include "interop/bvh_export.h"
+#include "interop/gltf_export.h"
+#include "interop/outputs.h"
 
 namespace spacetime::ui {
 

@@ -11,7 +11,7 @@
 #include "../shipped_scene.h"
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
-#include "solver/bvh_export.h"
+#include "interop/bvh_export.h"
 
 namespace spacetime {
 namespace {

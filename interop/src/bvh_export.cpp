@@ -1,5 +1,5 @@
 // BVH export (see bvh_export.h).
-#include "solver/bvh_export.h"
+#include "interop/bvh_export.h"
 
 #include <cmath>
 #include <cstdio>

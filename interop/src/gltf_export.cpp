@@ -1,6 +1,6 @@
 // glTF 2.0 binary export (see gltf_export.h). Layout follows the glTF 2.0 specification: a GLB
 // header, a JSON chunk and a BIN chunk holding every accessor's data, each view 4-byte aligned.
-#include "solver/gltf_export.h"
+#include "interop/gltf_export.h"
 
 #include <cmath>
 #include <cstdint>

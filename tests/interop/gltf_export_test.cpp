@@ -17,7 +17,7 @@
 #include "core/atomic_file.h"
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
-#include "solver/gltf_export.h"
+#include "interop/gltf_export.h"
 
 namespace spacetime {
 namespace {

@@ -1,7 +1,7 @@
 // URDF writer. Link frames are our body frames; a joint's origin is the body's tree placement
 // (parent frame -> joint frame) and its axis is given in the joint frame, exactly URDF's
 // convention. Inertials are the full tensors about each body's centre of mass.
-#include "dynamics/urdf_export.h"
+#include "interop/urdf_export.h"
 
 #include <algorithm>
 #include <cmath>

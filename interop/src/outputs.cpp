@@ -1,5 +1,5 @@
 // JSON writers for the command-line outputs (see outputs.h).
-#include "solver/outputs.h"
+#include "interop/outputs.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -12,9 +12,9 @@
 
 #include "core/atomic_file.h"
 #include "core/scene_io.h"
-#include "dynamics/urdf_export.h"
-#include "solver/bvh_export.h"
-#include "solver/gltf_export.h"
+#include "interop/urdf_export.h"
+#include "interop/bvh_export.h"
+#include "interop/gltf_export.h"
 
 namespace spacetime {
 namespace {
