@@ -1,7 +1,8 @@
 // spacetime-cli: solve a scene headless and write its outputs.
 //
-//   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S]
-//                       [--quiet] [--no-polish] [--max-refinements N] [--init SOLVED.json]
+//   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]
+//                       [--threads N] [--max-seconds S] [--quiet] [--no-polish]
+//                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt]
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
 // solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
@@ -32,7 +33,8 @@ using namespace spacetime;
 namespace {
 
 #define SPACETIME_CLI_USAGE \
-  "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--threads N] [--max-seconds S] [--quiet]\n" \
+  "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]\n" \
+  "                          [--threads N] [--max-seconds S] [--quiet]\n" \
   "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n" \
   "                          [--method al|ipopt]\n"
 
@@ -41,7 +43,9 @@ constexpr const char* kHelp =
     "\n"
     "Solves a Spacetime scene headless and writes DIR/summary.json, DIR/motion.json, one URDF and\n"
     "one BVH per character, DIR/motion.glb and DIR/scene.json (the scene with the solver's state).\n"
-    "  --rate HZ          frames per second of motion.json, BVH and glTF (default 1000)\n"
+    "  --rate HZ          frames per second of motion.json (default 1000)\n"
+    "  --bvh-rate HZ      frames per second of the BVH files (default 30)\n"
+    "  --gltf-rate HZ     keys per second of motion.glb's animation (default 120)\n"
     "  --threads N        Ceres evaluation threads (default 2)\n"
     "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
     "  --quiet            no progress on stderr\n"
@@ -86,7 +90,7 @@ int run(int argc, char** argv) {
     }
   if (argc < 2 || std::string(argv[1]) != "solve") return usage("expected the command 'solve'");
   std::string scenePath, outDir;
-  double rate = 1000;
+  OutputRates rates;
   // Ceres evaluates residual blocks on `threads` threads (kernels are thread-safe). 2 suits this
   // 2-core machine; a render farm running one solve per core wants 1.
   int threads = 2;
@@ -99,10 +103,11 @@ int run(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) outDir = argv[++i];
-    else if (a == "--rate" && i + 1 < argc) {
+    else if ((a == "--rate" || a == "--bvh-rate" || a == "--gltf-rate") && i + 1 < argc) {
       char* end = nullptr;
-      rate = std::strtod(argv[++i], &end);
-      if (!end || *end || !(rate > 0) || rate > 1e5) return usage("--rate must be a number of frames per second in (0, 100000]");
+      const double rate = std::strtod(argv[++i], &end);
+      if (!end || *end || !(rate > 0) || rate > 1e5) return usage((a + " must be a number of frames per second in (0, 100000]").c_str());
+      (a == "--rate" ? rates.motion : a == "--bvh-rate" ? rates.bvh : rates.gltf) = rate;
     } else if (a == "--threads" && i + 1 < argc) {
       char* end = nullptr;
       const long n = std::strtol(argv[++i], &end, 10);
@@ -199,7 +204,7 @@ int run(int argc, char** argv) {
                    a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,
                    a.maxUnactuatedResidualDense, a.seconds, a.kept ? " (kept)" : "");
   std::string warning;
-  if (!writeSolveOutputs(*problem, summary, validity, rate, outDir, &error, &warning, solved.attempts)) {
+  if (!writeSolveOutputs(*problem, summary, validity, rates, outDir, &error, &warning, solved.attempts)) {
     std::fprintf(stderr, "spacetime-cli: %s\n", error.c_str());
     return 1;
   }

@@ -295,26 +295,28 @@ bool checkOutputDirectory(const std::string& dir, std::string* error) {
 }
 
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
-                       const ValidityReport& validity, double rateHz, const std::string& dir,
+                       const ValidityReport& validity, const OutputRates& rates, const std::string& dir,
                        std::string* error, std::string* warning,
                        const std::vector<TranscriptionAttempt>& attempts) {
   namespace fs = std::filesystem;
   if (!checkOutputDirectory(dir, error)) return false;
   // Build every file's contents first, then write them; a failure names the file.
   std::vector<std::pair<std::string, std::string>> files;
-  const Animation animation = sampleAnimation(problem, rateHz);
+  const Animation animation = sampleAnimation(problem, rates.motion);
+  const Animation bvhFrames = sampleAnimation(problem, rates.bvh);
+  const Animation gltfKeys = sampleAnimation(problem, rates.gltf);
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const Model<double>& model = *problem.characters()[c].model;
     const CharacterSpec& spec = problem.scene().characters[c];
     const UrdfExport urdf = exportUrdf(model, spec);
     if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
     files.emplace_back(model.name + ".urdf", urdf.xml);
-    files.emplace_back(model.name + ".bvh", motionBvh(model, spec, animation.characters[c]));
+    files.emplace_back(model.name + ".bvh", motionBvh(model, spec, bvhFrames.characters[c]));
   }
   std::vector<const Model<double>*> models;
   for (const CharacterVariables& c : problem.characters()) models.push_back(c.model.get());
   files.emplace_back("motion.json", motionJson(animation));
-  files.emplace_back("motion.glb", motionGlb(problem.scene(), models, animation));
+  files.emplace_back("motion.glb", motionGlb(problem.scene(), models, gltfKeys));
   // The scene solved (with the transcription of the motion written) and the solver's state, so
   // that `spacetime-cli solve --init DIR/scene.json` resumes exactly where this solve stopped.
   Scene solved = problem.scene();

@@ -18,6 +18,32 @@ for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_s
   grep -q "$key" "$tmp/good/summary.json" || fail "summary.json lacks $key"
 done
 
+# Each format at its own rate: motion.json dense for analysis (1000 Hz), the BVH at an animation
+# rate (30 fps: at 1000 Hz Blender's importer, one scene frame per BVH frame, made a 1.2 s jump a 50 s action), glTF keys at 120 Hz;
+# each settable.
+cat > "$tmp/rates.py" <<'PY'
+import json, struct, sys
+d, motion, bvh, gltf = sys.argv[1], *map(float, sys.argv[2:])
+m = json.load(open(f"{d}/motion.json"))
+times = m["characters"][0]["times"] if "characters" in m else m["times"]
+assert abs((times[1] - times[0]) - 1 / motion) < 1e-9, ("motion.json", times[1] - times[0])
+text = open(f"{d}/particle.bvh").read()
+frame_time = float(text.split("Frame Time:")[1].split()[0])
+frames = int(text.split("Frames:")[1].split()[0])
+assert abs(frame_time - 1 / bvh) < 1e-6 and frames == round(bvh) + 1, ("bvh", frame_time, frames)
+glb = open(f"{d}/motion.glb", "rb").read()
+length = struct.unpack_from("<I", glb, 12)[0]
+doc = json.loads(glb[20:20 + length])
+keys = doc["accessors"][doc["animations"][0]["samplers"][0]["input"]]["count"]
+assert keys == round(gltf) + 1, ("glTF keys", keys)
+PY
+python3 "$tmp/rates.py" "$tmp/good" 1000 30 120 || fail "default output rates"
+"$cli" solve "$scenes/particle.json" --out "$tmp/rates" --rate 200 --bvh-rate 24 --gltf-rate 60 --quiet 2>/dev/null || fail "rates exited $?"
+python3 "$tmp/rates.py" "$tmp/rates" 200 24 60 || fail "--rate, --bvh-rate, --gltf-rate"
+"$cli" solve "$scenes/particle.json" --out "$tmp/badrate" --bvh-rate 0 2>"$tmp/badrate.err"; status=$?
+[ "$status" -eq 2 ] || fail "--bvh-rate 0 exited $status, expected 2"
+grep -q -- "--bvh-rate must be" "$tmp/badrate.err" || fail "unclear --bvh-rate error: $(cat "$tmp/badrate.err")"
+
 # The interior-point method (IPOPT) from the command line and from the scene's solver block; an
 # unknown method is bad input.
 "$cli" solve "$scenes/particle.json" --out "$tmp/ip" --method ipopt --quiet 2>"$tmp/ip.err" || fail "--method ipopt exited $?: $(cat "$tmp/ip.err")"

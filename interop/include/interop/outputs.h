@@ -28,10 +28,21 @@ std::string motionCsv(const Animation& animation);
 // one-line reason otherwise. Creates nothing.
 bool checkOutputDirectory(const std::string& dir, std::string* error);
 
+// Frames per second of each motion file. motion.json is for analysis (dense); a BVH at 1000 Hz
+// became a 50 s action in Blender's importer with its default settings (one scene frame per BVH
+// frame at 24 fps), so BVH gets an animation frame rate; glTF's linear keys at 30 Hz missed the lamp's
+// head by 1.9 cm between keys in the push-off, at 120 Hz by about 1/16 of that (the error of
+// linear interpolation falls with the square of the spacing).
+struct OutputRates {
+  double motion = 1000;  // motion.json
+  double bvh = 30;       // <character>.bvh
+  double gltf = 120;     // motion.glb
+};
+
 // Writes summary.json, motion.json, motion.glb, scene.json, <character>.urdf and <character>.bvh
-// (the motion at the same rate) as the directory dir, all together or not at all. False with a reason on error.
+// (the motion at `rates`) as the directory dir, all together or not at all. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
-                       const ValidityReport& validity, double rateHz, const std::string& dir,
+                       const ValidityReport& validity, const OutputRates& rates, const std::string& dir,
                        std::string* error, std::string* warning,
                        const std::vector<TranscriptionAttempt>& attempts = {});
 
