@@ -1,7 +1,7 @@
 // spacetime-cli: solve a scene headless and write its outputs.
 //
 //   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]
-//                       [--threads N] [--max-seconds S] [--quiet] [--no-polish]
+//                       [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet] [--no-polish]
 //                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt]
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
@@ -34,7 +34,7 @@ namespace {
 
 #define SPACETIME_CLI_USAGE \
   "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]\n" \
-  "                          [--threads N] [--max-seconds S] [--quiet]\n" \
+  "                          [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet]\n" \
   "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n" \
   "                          [--method al|ipopt]\n"
 
@@ -46,6 +46,8 @@ constexpr const char* kHelp =
     "  --rate HZ          frames per second of motion.json (default 1000)\n"
     "  --bvh-rate HZ      frames per second of the BVH files (default 30)\n"
     "  --gltf-rate HZ     keys per second of motion.glb's animation (default 120)\n"
+    "  --urdf-z-up        URDF files Z-up (the scene turned +90 degrees about X), so tools'\n"
+    "                     default gravity along -Z is the scene's; default: Y-up as the scene\n"
     "  --threads N        Ceres evaluation threads (default 2)\n"
     "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
     "  --quiet            no progress on stderr\n"
@@ -90,7 +92,7 @@ int run(int argc, char** argv) {
     }
   if (argc < 2 || std::string(argv[1]) != "solve") return usage("expected the command 'solve'");
   std::string scenePath, outDir;
-  OutputRates rates;
+  OutputOptions outputs;
   // Ceres evaluates residual blocks on `threads` threads (kernels are thread-safe). 2 suits this
   // 2-core machine; a render farm running one solve per core wants 1.
   int threads = 2;
@@ -107,7 +109,7 @@ int run(int argc, char** argv) {
       char* end = nullptr;
       const double rate = std::strtod(argv[++i], &end);
       if (!end || *end || !(rate > 0) || rate > 1e5) return usage((a + " must be a number of frames per second in (0, 100000]").c_str());
-      (a == "--rate" ? rates.motion : a == "--bvh-rate" ? rates.bvh : rates.gltf) = rate;
+      (a == "--rate" ? outputs.motionRate : a == "--bvh-rate" ? outputs.bvhRate : outputs.gltfRate) = rate;
     } else if (a == "--threads" && i + 1 < argc) {
       char* end = nullptr;
       const long n = std::strtol(argv[++i], &end, 10);
@@ -119,6 +121,7 @@ int run(int argc, char** argv) {
       if (!end || *end || !(maxSeconds > 0) || maxSeconds > 1e7) return usage("--max-seconds must be a number of seconds in (0, 1e7]");
     } else if (a == "--quiet") quiet = true;
     else if (a == "--no-polish") polish = false;
+    else if (a == "--urdf-z-up") outputs.urdfZUp = true;
     else if (a == "--max-refinements" && i + 1 < argc) {
       char* end = nullptr;
       const long n = std::strtol(argv[++i], &end, 10);
@@ -204,7 +207,7 @@ int run(int argc, char** argv) {
                    a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,
                    a.maxUnactuatedResidualDense, a.seconds, a.kept ? " (kept)" : "");
   std::string warning;
-  if (!writeSolveOutputs(*problem, summary, validity, rates, outDir, &error, &warning, solved.attempts)) {
+  if (!writeSolveOutputs(*problem, summary, validity, outputs, outDir, &error, &warning, solved.attempts)) {
     std::fprintf(stderr, "spacetime-cli: %s\n", error.c_str());
     return 1;
   }

@@ -295,20 +295,20 @@ bool checkOutputDirectory(const std::string& dir, std::string* error) {
 }
 
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
-                       const ValidityReport& validity, const OutputRates& rates, const std::string& dir,
+                       const ValidityReport& validity, const OutputOptions& options, const std::string& dir,
                        std::string* error, std::string* warning,
                        const std::vector<TranscriptionAttempt>& attempts) {
   namespace fs = std::filesystem;
   if (!checkOutputDirectory(dir, error)) return false;
   // Build every file's contents first, then write them; a failure names the file.
   std::vector<std::pair<std::string, std::string>> files;
-  const Animation animation = sampleAnimation(problem, rates.motion);
-  const Animation bvhFrames = sampleAnimation(problem, rates.bvh);
-  const Animation gltfKeys = sampleAnimation(problem, rates.gltf);
+  const Animation animation = sampleAnimation(problem, options.motionRate);
+  const Animation bvhFrames = sampleAnimation(problem, options.bvhRate);
+  const Animation gltfKeys = sampleAnimation(problem, options.gltfRate);
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const Model<double>& model = *problem.characters()[c].model;
     const CharacterSpec& spec = problem.scene().characters[c];
-    const UrdfExport urdf = exportUrdf(model, spec);
+    const UrdfExport urdf = exportUrdf(model, spec, UrdfOptions{options.urdfZUp});
     if (!urdf.warning.empty() && warning) *warning += urdf.warning + "\n";
     files.emplace_back(model.name + ".urdf", urdf.xml);
     files.emplace_back(model.name + ".bvh", motionBvh(model, spec, bvhFrames.characters[c]));

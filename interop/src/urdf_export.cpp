@@ -75,18 +75,34 @@ void writeVisual(std::ostringstream& out, const Geometry& g, const Eigen::Vector
 
 }  // namespace
 
-UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character) {
+Eigen::Matrix3d yUpToZUp() { return Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix(); }
+
+UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character, const UrdfOptions& options) {
   UrdfExport result;
   std::ostringstream out;
   const std::string world = model.name + "_world";
+  // The parent of the tree's roots: the world link, or in a Z-up file the scene's Y-up frame.
+  const std::string rootParent = options.zUp ? model.name + "_y_up" : world;
+  const Eigen::Vector3d gravity = options.zUp ? Eigen::Vector3d(yUpToZUp() * model.gravity) : model.gravity;
+  auto hint = [](double v) {  // 6 digits for people; rounding noise of the turn shows as 0
+    std::ostringstream s;
+    s << (std::abs(v) < 1e-12 ? 0.0 : v);
+    return s.str();
+  };
   out << "<?xml version=\"1.0\"?>\n";
   out << "<!-- Exported by Spacetime. Movable joints are the character's degrees of freedom in"
          " order; virtual links of the floating base are massless. -->\n";
+  out << "<!-- " << (options.zUp ? "Z up (the scene's Y-up frame is link " + rootParent + ")" : std::string("Y up"))
+      << ": gravity is (" << hint(gravity.x()) << " " << hint(gravity.y()) << " " << hint(gravity.z())
+      << ") m/s^2 in this file's frame"
+      << (options.zUp ? "" : "; URDF readers pull along -Z unless told (spacetime-cli --urdf-z-up writes a Z-up file)")
+      << ". -->\n";
   out << "<robot name=\"" << model.name << "\">\n";
   // MuJoCo refuses moving bodies without mass; its own extension lifts only the massless
   // virtual links to 1e-12 kg (other URDF readers ignore the element).
   out << "  <mujoco><compiler boundmass=\"1e-12\" boundinertia=\"1e-14\" discardvisual=\"true\"/></mujoco>\n";
   out << "  <link name=\"" << world << "\"/>\n";
+  if (options.zUp) out << "  <link name=\"" << rootParent << "\"/>\n";
   for (int i = 0; i < model.bodyCount(); ++i) {
     const Body<double>& b = model.bodies[i];
     out << "  <link name=\"" << b.name << "\">\n";
@@ -117,7 +133,7 @@ UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character
     }
     const std::string name = b.jointName.empty() ? b.name + "_fixed" : b.jointName;
     out << "  <joint name=\"" << name << "\" type=\"" << type << "\">\n";
-    out << "    <parent link=\"" << (b.parent >= 0 ? model.bodies[b.parent].name : world)
+    out << "    <parent link=\"" << (b.parent >= 0 ? model.bodies[b.parent].name : rootParent)
         << "\"/>\n    <child link=\"" << b.name << "\"/>\n";
     out << "    " << originTag(b.X_tree.r, rpyOf(b.X_tree.E.transpose())) << "\n";
     if (b.joint.type != JointType::Fixed) {
@@ -133,6 +149,11 @@ UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character
       }
     }
     out << "  </joint>\n";
+  }
+  if (options.zUp) {  // the scene's frame under the Z-up world: Y becomes Z
+    out << "  <joint name=\"" << rootParent << "\" type=\"fixed\">\n    <parent link=\"" << world
+        << "\"/>\n    <child link=\"" << rootParent << "\"/>\n    "
+        << originTag(Eigen::Vector3d::Zero(), rpyOf(yUpToZUp())) << "\n  </joint>\n";
   }
   out << "</robot>\n";
   result.xml = out.str();

@@ -40,6 +40,11 @@ PY
 python3 "$tmp/rates.py" "$tmp/good" 1000 30 120 || fail "default output rates"
 "$cli" solve "$scenes/particle.json" --out "$tmp/rates" --rate 200 --bvh-rate 24 --gltf-rate 60 --quiet 2>/dev/null || fail "rates exited $?"
 python3 "$tmp/rates.py" "$tmp/rates" 200 24 60 || fail "--rate, --bvh-rate, --gltf-rate"
+# The URDF says its gravity; --urdf-z-up turns it Z-up, where tools' default gravity is the scene's.
+"$cli" solve "$scenes/particle_gravity.json" --out "$tmp/yup" --quiet 2>/dev/null || fail "particle_gravity exited $?"
+grep -q 'gravity is (0 -9.81 0)' "$tmp/yup/particle.urdf" || fail "the default URDF does not say its gravity"
+"$cli" solve "$scenes/particle_gravity.json" --out "$tmp/zup" --urdf-z-up --quiet 2>/dev/null || fail "--urdf-z-up exited $?"
+grep -q 'gravity is (0 0 -9.81)' "$tmp/zup/particle.urdf" || fail "--urdf-z-up: the URDF is not Z-up"
 "$cli" solve "$scenes/particle.json" --out "$tmp/badrate" --bvh-rate 0 2>"$tmp/badrate.err"; status=$?
 [ "$status" -eq 2 ] || fail "--bvh-rate 0 exited $status, expected 2"
 grep -q -- "--bvh-rate must be" "$tmp/badrate.err" || fail "unclear --bvh-rate error: $(cat "$tmp/badrate.err")"

@@ -20,10 +20,12 @@ namespace {
 
 // Loads the URDF into MuJoCo, compares mj_inverse with our RNEA; returns the worst relative
 // error over `states` random states.
+// With zUp the file is the Z-up export and MuJoCo keeps its default gravity (0, 0, -9.81),
+// which must then be the scene's gravity turned into that frame.
 double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d& gravity,
-                          int states, unsigned seed) {
+                          int states, unsigned seed, bool zUp = false) {
   const Model<double> model = buildModel(character, gravity);
-  const UrdfExport urdf = exportUrdf(model, character);
+  const UrdfExport urdf = exportUrdf(model, character, UrdfOptions{zUp});
   const std::string path = ::testing::TempDir() + "/" + character.id + std::to_string(seed) + ".urdf";
   std::ofstream(path) << urdf.xml;
   char error[1000] = "";
@@ -31,7 +33,8 @@ double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d&
   EXPECT_NE(m, nullptr) << error;
   if (!m) return 1e9;
   m->opt.disableflags |= mjDSBL_CONSTRAINT | mjDSBL_CONTACT | mjDSBL_PASSIVE;
-  for (int k = 0; k < 3; ++k) m->opt.gravity[k] = gravity[k];
+  if (!zUp)
+    for (int k = 0; k < 3; ++k) m->opt.gravity[k] = gravity[k];
   mjData* d = mj_makeData(m);
   EXPECT_EQ(m->nv, model.dofCount());
   const testing::MujocoDofs adr = testing::mujocoDofs(m, model.dofNames());
@@ -61,6 +64,20 @@ TEST(MujocoInverse, ShippedCharactersAgree) {
   for (const char* scene : {"luxo_jump.json", "luxo_heavy.json", "luxo_3d.json", "particle_gravity.json"}) {
     const Scene s = testing::shippedScene(scene);
     EXPECT_LT(worstRelativeError(s.characters[0], s.gravity, 50, 7), 1e-9) << scene;
+  }
+}
+
+// The Z-up export: MuJoCo with its default gravity (along -Z) reproduces our inverse dynamics
+// under the scene's (0, -9.81, 0). Both files say their gravity in a comment.
+TEST(MujocoInverse, ZUpExportNeedsNoGravitySetting) {
+  for (const char* scene : {"luxo_jump.json", "luxo_3d.json"}) {
+    const Scene s = testing::shippedScene(scene);
+    ASSERT_EQ(s.gravity, Eigen::Vector3d(0, -9.81, 0));
+    const Model<double> model = buildModel(s.characters[0], s.gravity);
+    const std::string yUp = exportUrdf(model, s.characters[0]).xml;
+    EXPECT_NE(yUp.find("gravity is (0 -9.81 0)"), std::string::npos) << yUp.substr(0, 400);
+    EXPECT_NE(exportUrdf(model, s.characters[0], UrdfOptions{true}).xml.find("gravity is (0 0 -9.81)"), std::string::npos);
+    EXPECT_LT(worstRelativeError(s.characters[0], s.gravity, 50, 7, /*zUp=*/true), 1e-9) << scene;
   }
 }
 

@@ -158,7 +158,7 @@ TEST_P(MujocoReplay, SolvedMotionFilesReplayInMujoco) {
   const std::string dir = ::testing::TempDir() + "/replay_" + std::string(GetParam());
   std::filesystem::remove_all(dir);
   std::string warning;
-  ASSERT_TRUE(writeSolveOutputs(*problem, summary, checkValidity(*problem), OutputRates{4000}, dir, &error, &warning)) << error;
+  ASSERT_TRUE(writeSolveOutputs(*problem, summary, checkValidity(*problem), OutputOptions{4000}, dir, &error, &warning)) << error;
 
   const Replay r = replayInMujoco(dir);
   EXPECT_GT(r.frames, 1000);

@@ -33,16 +33,17 @@ bool checkOutputDirectory(const std::string& dir, std::string* error);
 // frame at 24 fps), so BVH gets an animation frame rate; glTF's linear keys at 30 Hz missed the lamp's
 // head by 1.9 cm between keys in the push-off, at 120 Hz by about 1/16 of that (the error of
 // linear interpolation falls with the square of the spacing).
-struct OutputRates {
-  double motion = 1000;  // motion.json
-  double bvh = 30;       // <character>.bvh
-  double gltf = 120;     // motion.glb
+struct OutputOptions {
+  double motionRate = 1000;  // motion.json
+  double bvhRate = 30;       // <character>.bvh
+  double gltfRate = 120;     // motion.glb
+  bool urdfZUp = false;      // the URDF files Z-up (UrdfOptions::zUp)
 };
 
 // Writes summary.json, motion.json, motion.glb, scene.json, <character>.urdf and <character>.bvh
-// (the motion at `rates`) as the directory dir, all together or not at all. False with a reason on error.
+// (the motion at the options' rates) as the directory dir, all together or not at all. False with a reason on error.
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
-                       const ValidityReport& validity, const OutputRates& rates, const std::string& dir,
+                       const ValidityReport& validity, const OutputOptions& options, const std::string& dir,
                        std::string* error, std::string* warning,
                        const std::vector<TranscriptionAttempt>& attempts = {});
 

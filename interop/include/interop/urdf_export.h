@@ -16,6 +16,17 @@ struct UrdfExport {
   std::string warning;  // non-empty when something could not be expressed exactly
 };
 
-UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character);
+// The scene is Y-up; URDF readers (MuJoCo, Pinocchio, ROS) pull along -Z unless told. zUp
+// turns the character +90 degrees about X under a fixed joint from the world link (the scene's
+// Y becomes Z), so that their default gravity is the scene's (0, -9.81, 0); the dofs are the
+// same. Either way a comment in the file gives the gravity vector in its frame.
+struct UrdfOptions {
+  bool zUp = false;
+};
+
+UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character, const UrdfOptions& options = {});
+
+// The rotation from the scene's Y-up frame to a Z-up URDF's world: +90 degrees about X.
+Eigen::Matrix3d yUpToZUp();
 
 }  // namespace spacetime
