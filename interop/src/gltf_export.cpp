@@ -113,6 +113,52 @@ int bodyMesh(GlbWriter& w, const BodySpec& body) {
 
 }  // namespace
 
+std::vector<double> gltfKeyTimes(const SpacetimeProblem& problem, double rateHz) {
+  const Scene& scene = problem.scene();
+  const int intervals = std::max(1, static_cast<int>(std::lround((scene.endTime - scene.startTime) * rateHz)));
+  auto fastest = [&](double t) {  // the largest dof speed at t, either side of an impact
+    double v = 0;
+    for (size_t c = 0; c < problem.characters().size(); ++c) {
+      const int ci = static_cast<int>(c);
+      v = std::max(v, problem.jointState(ci, t, 1).lpNorm<Eigen::Infinity>());
+      if (t > scene.startTime) v = std::max(v, problem.jointStateOnSide(ci, t, 1, Side::Before).lpNorm<Eigen::Infinity>());
+    }
+    return v;
+  };
+  // The grid, and every instant where a dof's polynomial piece changes (the B-splines' knots, the
+  // root's breakpoints): a key interval across one has a jump in the third derivative inside,
+  // which a cubic cannot follow (measured: 2e-3 off in the head's rotation across the knot at
+  // 0.25 s of the jump's push-off).
+  std::vector<double> grid;
+  for (int k = 0; k <= intervals; ++k) grid.push_back(scene.startTime + (scene.endTime - scene.startTime) * k / intervals);
+  for (const CharacterVariables& c : problem.characters())
+    for (const DofGroup& g : c.groups) {
+      if (g.hermite) grid.insert(grid.end(), g.breaks.begin(), g.breaks.end());
+      else
+        for (int k = 0; k <= g.spline.segmentCount(); ++k) grid.push_back(g.spline.start() + k * g.spline.knotSpacing());
+    }
+  std::sort(grid.begin(), grid.end());
+  // Keys closer than a microsecond are one (float seconds in the file; an impact's repeated
+  // breakpoint).
+  std::vector<double> merged;
+  for (double t : grid)
+    if (t >= scene.startTime - kTimeTolerance && t <= scene.endTime + kTimeTolerance && (merged.empty() || t - merged.back() > 1e-6))
+      merged.push_back(std::clamp(t, scene.startTime, scene.endTime));
+  std::vector<double> times = {merged[0]};
+  double speedBefore = fastest(merged[0]);
+  for (size_t k = 1; k < merged.size(); ++k) {
+    const double a = times.back(), b = merged[k];
+    const double speedAfter = fastest(b);
+    // The speed inside the interval: its ends' and its middle's.
+    const double speed = std::max({speedBefore, speedAfter, fastest(0.5 * (a + b))});
+    const int pieces = std::clamp(static_cast<int>(std::ceil((b - a) * speed / kMaxKeyTurn)), 1, 64);
+    for (int p = 1; p < pieces; ++p) times.push_back(a + (b - a) * p / pieces);
+    times.push_back(b);
+    speedBefore = speedAfter;
+  }
+  return times;
+}
+
 std::string motionGlb(const Scene& scene, const std::vector<const Model<double>*>& models,
                       const Animation& animation) {
   GlbWriter w;
@@ -122,9 +168,15 @@ std::string motionGlb(const Scene& scene, const std::vector<const Model<double>*
   for (double t : grid) times.push_back(Eigen::Matrix<float, 1, 1>(static_cast<float>(t - grid[0])));
   const int input = times.size() >= 2 ? w.floats(times, 0, true) : -1;
 
+  // Cubic Hermite keys with the motion's own tangents when it has velocities (glTF 2.0 Appendix C:
+  // each key an in-tangent, the value and an out-tangent, in units per second), so a player is
+  // exact to O(h^4) between keys; linear keys otherwise.
+  bool cubic = !animation.characters.empty();
+  for (const CharacterAnimation& a : animation.characters)
+    cubic = cubic && a.qd.rows() == static_cast<Eigen::Index>(a.times.size()) && a.qdBefore.rows() == a.qd.rows();
   json roots = json::array(), channels = json::array(), samplers = json::array();
   auto animate = [&](int node, const char* path, int output) {
-    samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
+    samplers.push_back({{"input", input}, {"output", output}, {"interpolation", cubic ? "CUBICSPLINE" : "LINEAR"}});
     channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", node}, {"path", path}}}});
   };
 
@@ -134,22 +186,68 @@ std::string motionGlb(const Scene& scene, const std::vector<const Model<double>*
     const CharacterAnimation& track = animation.characters[c];
     const std::vector<Bone> bones = skeletonOf(model);
 
-    // Every bone's local pose at every frame.
+    // Every bone's local pose at every frame: with cubic keys (in-tangent, value, out-tangent)
+    // per frame, the tangents being the pose's derivative along q-dot before and after it.
     const int frames = static_cast<int>(track.times.size());
     std::vector<std::vector<Eigen::Vector3f>> translation(bones.size());
     std::vector<std::vector<Eigen::Vector4f>> rotation(bones.size());  // x, y, z, w
     Data<double> data(model);
-    for (int f = 0; f < frames; ++f) {
-      const Eigen::VectorXd q = track.q.row(f).transpose();
+    std::vector<Eigen::Vector3d> t0(bones.size());
+    std::vector<Eigen::Vector4d> r0(bones.size());
+    auto poses = [&](const Eigen::VectorXd& q, std::vector<Eigen::Vector3d>& t, std::vector<Eigen::Vector4d>& r) {
       forwardKinematics(model, data, q.data());
       for (size_t b = 0; b < bones.size(); ++b) {
         const Eigen::Isometry3d pose = localPose(bones, data, static_cast<int>(b));
-        Eigen::Vector4f r = Eigen::Quaterniond(pose.linear()).normalized().coeffs().cast<float>();
-        if (f > 0 && r.dot(rotation[b].back()) < 0) r = -r;
-        translation[b].push_back(pose.translation().cast<float>());
-        rotation[b].push_back(r);
+        t[b] = pose.translation();
+        r[b] = Eigen::Quaterniond(pose.linear()).normalized().coeffs();
+      }
+    };
+    // d/dt of every bone's pose along q-dot = v: central differences in q along v, exact to
+    // O(h^2) (h |v| = 1e-6), quaternions taken on the key's hemisphere.
+    auto tangents = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& v, std::vector<Eigen::Vector3f>& dt,
+                        std::vector<Eigen::Vector4f>& dr) {
+      dt.assign(bones.size(), Eigen::Vector3f::Zero());
+      dr.assign(bones.size(), Eigen::Vector4f::Zero());
+      const double speed = v.lpNorm<Eigen::Infinity>();
+      if (!(speed > 0)) return;
+      const double h = 1e-6 / speed;
+      std::vector<Eigen::Vector3d> tp(bones.size()), tm(bones.size());
+      std::vector<Eigen::Vector4d> rp(bones.size()), rm(bones.size());
+      poses(q + h * v, tp, rp);
+      poses(q - h * v, tm, rm);
+      for (size_t b = 0; b < bones.size(); ++b) {
+        if (rp[b].dot(r0[b]) < 0) rp[b] = -rp[b];
+        if (rm[b].dot(r0[b]) < 0) rm[b] = -rm[b];
+        dt[b] = ((tp[b] - tm[b]) / (2 * h)).cast<float>();
+        dr[b] = ((rp[b] - rm[b]) / (2 * h)).cast<float>();
+      }
+    };
+    std::vector<Eigen::Vector3f> inT, outT;
+    std::vector<Eigen::Vector4f> inR, outR;
+    for (int f = 0; f < frames; ++f) {
+      const Eigen::VectorXd q = track.q.row(f).transpose();
+      poses(q, t0, r0);
+      for (size_t b = 0; b < bones.size(); ++b)  // one hemisphere from key to key
+        if (f > 0 && r0[b].cast<float>().dot(rotation[b][cubic ? rotation[b].size() - 2 : rotation[b].size() - 1]) < 0)
+          r0[b] = -r0[b];
+      if (cubic) {
+        tangents(q, track.qdBefore.row(f).transpose(), inT, inR);
+        tangents(q, track.qd.row(f).transpose(), outT, outR);
+      }
+      for (size_t b = 0; b < bones.size(); ++b) {
+        if (cubic) {
+          translation[b].push_back(inT[b]);
+          rotation[b].push_back(inR[b]);
+        }
+        translation[b].push_back(t0[b].cast<float>());
+        rotation[b].push_back(r0[b].cast<float>());
+        if (cubic) {
+          translation[b].push_back(outT[b]);
+          rotation[b].push_back(outR[b]);
+        }
       }
     }
+    const int valueAt = cubic ? 1 : 0;  // the first key's value in the output arrays
 
     // Nodes: the character, then its bones (children listed after the fact).
     const int characterNode = w.push("nodes", {{"name", spec.id}});
@@ -159,8 +257,8 @@ std::string motionGlb(const Scene& scene, const std::vector<const Model<double>*
       const std::string& name = model.bodies[bones[b].body].name;
       json node = {{"name", name}};
       if (frames > 0) {
-        node["translation"] = std::vector<float>(translation[b][0].data(), translation[b][0].data() + 3);
-        node["rotation"] = std::vector<float>(rotation[b][0].data(), rotation[b][0].data() + 4);
+        node["translation"] = std::vector<float>(translation[b][valueAt].data(), translation[b][valueAt].data() + 3);
+        node["rotation"] = std::vector<float>(rotation[b][valueAt].data(), rotation[b][valueAt].data() + 4);
       }
       if (const BodySpec* body = spec.body(name)) {
         const int mesh = bodyMesh(w, *body);

@@ -304,7 +304,7 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
   std::vector<std::pair<std::string, std::string>> files;
   const Animation animation = sampleAnimation(problem, options.motionRate);
   const Animation bvhFrames = sampleAnimation(problem, options.bvhRate);
-  const Animation gltfKeys = sampleAnimation(problem, options.gltfRate);
+  const Animation gltfKeys = sampleAnimationAt(problem, gltfKeyTimes(problem, options.gltfRate));
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const Model<double>& model = *problem.characters()[c].model;
     const CharacterSpec& spec = problem.scene().characters[c];

@@ -41,6 +41,7 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
     const int n = model.dofCount();
     ca.q.resize(frames, n);
     ca.qd.resize(frames, n);
+    ca.qdBefore.resize(frames, n);
     ca.qdd.resize(frames, n);
     ca.tau.resize(frames, n);
     for (size_t j = 0; j < problem.contacts().size(); ++j) {
@@ -68,6 +69,8 @@ Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<d
       ca.times.push_back(t);
       ca.q.row(f) = problem.jointState(ci, t, 0).transpose();
       ca.qd.row(f) = problem.jointState(ci, t, 1).transpose();
+      ca.qdBefore.row(f) = ca.qd.row(f);
+      if (t > scene.startTime) ca.qdBefore.row(f) = problem.jointStateOnSide(ci, t, 1, Side::Before).transpose();
       ca.qdd.row(f) = problem.jointState(ci, t, 2).transpose();
       const GroundForces ground = groundForcesAt(problem, ci, t);
       ca.tau.row(f) = generalizedForcesAt(problem, ci, t, &ground).transpose();

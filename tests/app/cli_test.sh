@@ -19,7 +19,7 @@ for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_s
 done
 
 # Each format at its own rate: motion.json dense for analysis (1000 Hz), the BVH at an animation
-# rate (30 fps: at 1000 Hz Blender's importer, one scene frame per BVH frame, made a 1.2 s jump a 50 s action), glTF keys at 120 Hz;
+# rate (30 fps: at 1000 Hz Blender's importer, one scene frame per BVH frame, made a 1.2 s jump a 50 s action), glTF keys on a 30 Hz grid;
 # each settable.
 cat > "$tmp/rates.py" <<'PY'
 import json, struct, sys
@@ -34,10 +34,17 @@ assert abs(frame_time - 1 / bvh) < 1e-6 and frames == round(bvh) + 1, ("bvh", fr
 glb = open(f"{d}/motion.glb", "rb").read()
 length = struct.unpack_from("<I", glb, 12)[0]
 doc = json.loads(glb[20:20 + length])
-keys = doc["accessors"][doc["animations"][0]["samplers"][0]["input"]]["count"]
-assert keys == round(gltf) + 1, ("glTF keys", keys)
+# glTF keys: the uniform grid at the rate, plus knots and denser keys in fast motion (cubic keys).
+sampler = doc["animations"][0]["samplers"][0]
+accessor = doc["accessors"][sampler["input"]]
+view = doc["bufferViews"][accessor["bufferView"]]
+binary = glb[20 + length + 8:]
+keys = struct.unpack_from(f"<{accessor['count']}f", binary, view.get("byteOffset", 0) + accessor.get("byteOffset", 0))
+grid = [k / gltf for k in range(round(gltf * keys[-1]) + 1)]
+assert all(min(abs(k - g) for k in keys) < 1e-5 for g in grid), ("glTF keys miss the grid", len(keys))
+assert sampler["interpolation"] == "CUBICSPLINE", sampler
 PY
-python3 "$tmp/rates.py" "$tmp/good" 1000 30 120 || fail "default output rates"
+python3 "$tmp/rates.py" "$tmp/good" 1000 30 30 || fail "default output rates"
 "$cli" solve "$scenes/particle.json" --out "$tmp/rates" --rate 200 --bvh-rate 24 --gltf-rate 60 --quiet 2>/dev/null || fail "rates exited $?"
 python3 "$tmp/rates.py" "$tmp/rates" 200 24 60 || fail "--rate, --bvh-rate, --gltf-rate"
 # The URDF says its gravity; --urdf-z-up turns it Z-up, where tools' default gravity is the scene's.

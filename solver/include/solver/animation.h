@@ -34,6 +34,9 @@ struct CharacterAnimation {
   std::vector<bool> actuated;
   std::vector<double> times;
   Eigen::MatrixXd q, qd, qdd, tau;  // frames x dofs
+  // q-dot just before each frame: qd's left limit, which differs from qd only at a touch-down's
+  // impact (the glTF export's incoming tangents). Empty for an animation without velocities.
+  Eigen::MatrixXd qdBefore;
   std::vector<ContactTrack> contacts;
 };
 
