@@ -26,7 +26,9 @@ double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d&
                           int states, unsigned seed, bool zUp = false) {
   const Model<double> model = buildModel(character, gravity);
   const UrdfExport urdf = exportUrdf(model, character, UrdfOptions{zUp});
-  const std::string path = ::testing::TempDir() + "/" + character.id + std::to_string(seed) + ".urdf";
+  // One file per test and variant: ctest runs the tests in parallel processes.
+  const std::string path = ::testing::TempDir() + "/" + ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+                           "_" + character.id + std::to_string(seed) + (zUp ? "_z_up" : "") + ".urdf";
   std::ofstream(path) << urdf.xml;
   char error[1000] = "";
   mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
