@@ -44,8 +44,8 @@ constexpr const char* kHelp =
     "Solves a Spacetime scene headless and writes DIR/summary.json, DIR/motion.json, one URDF and\n"
     "one BVH per character, DIR/motion.glb and DIR/scene.json (the scene with the solver's state).\n"
     "  --rate HZ          frames per second of motion.json (default 1000)\n"
-    "  --bvh-rate HZ      frames per second of the BVH files (default 30)\n"
-    "  --gltf-rate HZ     motion.glb's key grid per second (default 30; cubic keys, plus the\n"
+    "  --bvh-rate HZ      frames per second of the BVH files (default: the scene's time.frameRate, 30)\n"
+    "  --gltf-rate HZ     motion.glb's key grid per second (default: the frame rate; cubic keys, plus the\n"
     "                     splines' knots and denser keys in fast motion)\n"
     "  --urdf-z-up        URDF files Z-up (the scene turned +90 degrees about X), so tools'\n"
     "                     default gravity along -Z is the scene's; default: Y-up as the scene\n"
@@ -94,6 +94,7 @@ int run(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) != "solve") return usage("expected the command 'solve'");
   std::string scenePath, outDir;
   OutputOptions outputs;
+  bool bvhRateGiven = false, gltfRateGiven = false;  // else the scene's frame rate
   // Ceres evaluates residual blocks on `threads` threads (kernels are thread-safe). 2 suits this
   // 2-core machine; a render farm running one solve per core wants 1.
   int threads = 2;
@@ -111,6 +112,8 @@ int run(int argc, char** argv) {
       const double rate = std::strtod(argv[++i], &end);
       if (!end || *end || !(rate > 0) || rate > 1e5) return usage((a + " must be a number of frames per second in (0, 100000]").c_str());
       (a == "--rate" ? outputs.motionRate : a == "--bvh-rate" ? outputs.bvhRate : outputs.gltfRate) = rate;
+      bvhRateGiven = bvhRateGiven || a == "--bvh-rate";
+      gltfRateGiven = gltfRateGiven || a == "--gltf-rate";
     } else if (a == "--threads" && i + 1 < argc) {
       char* end = nullptr;
       const long n = std::strtol(argv[++i], &end, 10);
@@ -174,6 +177,8 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "spacetime-cli: %s\n", error.c_str());
     return 2;
   }
+  if (!bvhRateGiven) outputs.bvhRate = loaded.scene->frameRate;
+  if (!gltfRateGiven) outputs.gltfRate = loaded.scene->frameRate;
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = threads;
   options.maxSeconds = maxSeconds;

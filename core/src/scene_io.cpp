@@ -496,10 +496,15 @@ Scene readScene(const Reader& r, const json& root) {
         r.badValue(std::string("units.") + key, u[key], std::string("\"") + unit + "\" (SI units only)");
   }
   const json& time = r.required(root, "", "time");
-  r.allowKeys(time, "time", {"start", "end"});
+  r.allowKeys(time, "time", {"start", "end", "frameRate"});
   s.startTime = r.number(r.required(time, "time", "start"), "time.start");
   s.endTime = r.number(r.required(time, "time", "end"), "time.end");
   if (!(s.endTime > s.startTime)) r.badValue("time.end", time["end"], "a time after time.start");
+  if (time.contains("frameRate")) {
+    s.frameRate = r.number(time["frameRate"], "time.frameRate");
+    if (!(s.frameRate >= 1 && s.frameRate <= Scene::kMaxFrameRate))
+      r.badValue("time.frameRate", time["frameRate"], "a number of frames per second from 1 to 1000");
+  }
   if (root.contains("gravity")) s.gravity = r.vec3(root["gravity"], "gravity");
   if (root.contains("ground")) {
     const json& g = root["ground"];
@@ -814,7 +819,7 @@ std::string sceneToJson(const Scene& s) {
   root["formatVersion"] = kSceneFormatVersion;
   root["name"] = s.name;
   root["units"] = {{"length", "m"}, {"mass", "kg"}, {"time", "s"}, {"angle", "rad"}};
-  root["time"] = {{"start", s.startTime}, {"end", s.endTime}};
+  root["time"] = {{"start", s.startTime}, {"end", s.endTime}, {"frameRate", s.frameRate}};
   root["gravity"] = vec(s.gravity);
   root["ground"] = {{"enabled", s.groundEnabled}, {"height", s.groundHeight}};
   root["transcription"] = {{"controlPointsPerSecond", s.transcription.controlPointsPerSecond},

@@ -51,16 +51,19 @@ TEST(SceneIo, FreeContactEndRoundTrips) {
   EXPECT_EQ(free, 1);
 }
 
-// The solver method a scene asks for is saved and read back.
-TEST(SceneIo, SolverMethodRoundTrips) {
+// The solver method and the frame rate a scene asks for are saved and read back.
+TEST(SceneIo, SolverMethodAndFrameRateRoundTrip) {
   const SceneLoadResult r = loadSceneFile(std::string(kScenes) + "/luxo_jump.json");
   ASSERT_TRUE(r.scene) << r.error;
   EXPECT_EQ(r.scene->solver.method, "al");  // the default
   Scene scene = *r.scene;
   scene.solver.method = "ipopt";
+  EXPECT_EQ(scene.frameRate, 30);  // the default
+  scene.frameRate = 24;
   const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
   ASSERT_TRUE(again.scene) << again.error;
   EXPECT_EQ(again.scene->solver.method, "ipopt");
+  EXPECT_EQ(again.scene->frameRate, 24);
 }
 
 // A joint axis beyond the loader's magnitude bound is refused, naming the component (its
@@ -136,6 +139,8 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {R"({"format": "spacetime-scene", "formatVersion": 99, "time": {"start":0,"end":1}, "characters": []})",
        "newer Spacetime"},
       {R"({"format": "spacetime-scene", "formatVersion": 1, "characters": []})", "'time'"},
+      {R"({"format": "spacetime-scene", "formatVersion": 1, "time": {"start": 0, "end": 1, "frameRate": 0}, "characters": []})",
+       "time.frameRate': value 0 is not allowed; expected a number of frames per second from 1 to 1000"},
       {minimalWith(R"({"id": "base", "mass": -1})"), "characters[0].bodies[0].mass': value -1"},
       {minimalWith(R"({"id": "base"})"), "needs a mass or a density"},
       {minimalWith(body + R"(, {"id": "arm", "parent": "nope", "mass": 1, "joint": {"id": "j", "type": "revolute"}})"),

@@ -281,6 +281,12 @@ class EditorTest : public QObject {
     QVERIFY(bvh24.open(QIODevice::ReadOnly));
     const QString text24 = QString::fromUtf8(bvh24.readAll());
     QVERIFY2(text24.contains("Frames: 25\n"), qPrintable(text24.left(400)));
+    // The rate is the scene's (saved with it, one undo step); the solved motion still fits it.
+    QCOMPARE(w.document()->scene().frameRate, 24.0);
+    QVERIFY(w.document()->showsSolutionOfScene());
+    w.document()->undoStack()->undo();
+    QCOMPARE(w.document()->scene().frameRate, 30.0);
+    QCOMPARE(fps->value(), 30);
   }
 
   // The dock layout survives a restart: closing saves it to QSettings, the next window restores

@@ -14,9 +14,10 @@ bool sameScene(const Scene& a, const Scene& b) { return sceneToJson(a) == sceneT
 
 // The canonical text of a scene without its stored solution: what a solution solves.
 std::string problemKey(const Scene& scene) {
-  if (!scene.solution) return sceneToJson(scene);
+  // The frame rate is how the motion is shown and exported, not part of the problem.
   Scene bare = scene;
   bare.solution.reset();
+  bare.frameRate = Scene{}.frameRate;
   return sceneToJson(bare);
 }
 

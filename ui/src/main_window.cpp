@@ -411,19 +411,27 @@ bool MainWindow::exportUrdf(const QString& directory, QString* error) {
   });
 }
 
+namespace {
+// The solved motion sampled again from its solution (its splines, not an interpolation of the
+// display's samples) by `sample`; the display's samples if the solution cannot be rebuilt.
+Animation resampled(const SolvedMotion& motion, const std::function<Animation(const SpacetimeProblem&)>& sample) {
+  if (motion.scene) {
+    std::string why;
+    auto problem = SpacetimeProblem::build(*motion.scene, &why);
+    if (problem && problem->restore(motion.state)) return sample(*problem);
+  }
+  return motion.animation;
+}
+}  // namespace
+
 bool MainWindow::exportBvh(const QString& directory, QString* error) {
   const std::shared_ptr<const SolvedMotion> motion = doc_.motion();
   if (!motion || !motionFitsScene(*motion, doc_.scene())) { *error = tr("Nothing to export: solve first."); return false; }
   // At the timeline's frame rate: a BVH importer (Blender's) makes one scene frame of each BVH
   // frame, so the display's 120 Hz samples played a 1.2 s jump over 6 s at 24 fps. The motion is
   // sampled again from its solution at that rate (its spline, not an interpolation of samples).
-  const double rate = timeline_->framesPerSecond();
-  Animation animation = motion->animation;
-  if (motion->scene) {
-    std::string why;
-    auto problem = SpacetimeProblem::build(*motion->scene, &why);
-    if (problem && problem->restore(motion->state)) animation = sampleAnimation(*problem, rate);
-  }
+  const double rate = doc_.scene().frameRate;
+  const Animation animation = resampled(*motion, [&](const SpacetimeProblem& p) { return sampleAnimation(p, rate); });
   return writeCharacterFiles(directory, "bvh", error, [&](size_t i, const CharacterSpec& c, const Model<double>& model) {
     return motionBvh(model, c, animation.characters[i]);
   });
@@ -434,8 +442,12 @@ bool MainWindow::exportGltf(const QString& path, QString* error) {
   if (!motion || !motionFitsScene(*motion, doc_.scene())) { *error = tr("Nothing to export: solve first."); return false; }
   std::vector<const Model<double>*> models;
   for (const Model<double>& m : doc_.models()) models.push_back(&m);
+  // Cubic keys on the scene's frame grid plus the splines' knots (gltfKeyTimes), like the CLI's.
+  const double rate = doc_.scene().frameRate;
+  const Animation keys =
+      resampled(*motion, [&](const SpacetimeProblem& p) { return sampleAnimationAt(p, gltfKeyTimes(p, rate)); });
   std::string why;
-  if (writeFileAtomically(path.toStdString(), motionGlb(doc_.scene(), models, motion->animation), &why)) return true;
+  if (writeFileAtomically(path.toStdString(), motionGlb(doc_.scene(), models, keys), &why)) return true;
   *error = QString::fromStdString(why);
   return false;
 }
@@ -461,7 +473,7 @@ bool MainWindow::exportImageSequence(const QString& directory, QString* error) {
   if (!QDir().mkpath(directory)) { *error = tr("%1: cannot create the folder").arg(directory); return false; }
   const Scene& s = doc_.scene();
   const double before = doc_.currentTime();
-  const int fps = timeline_->framesPerSecond();
+  const double fps = doc_.scene().frameRate;
   const int frames = static_cast<int>(std::floor((s.endTime - s.startTime) * fps + 1e-9)) + 1;
   for (int f = 0; f < frames; ++f) {
     doc_.setCurrentTime(s.startTime + static_cast<double>(f) / fps);

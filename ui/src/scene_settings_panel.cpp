@@ -25,6 +25,8 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
               [](Scene& s, double v) { s.startTime = std::min(v, s.endTime - kShortestClip); }, -1e3, 1e3, 0.1, 3, tr(" s"));
   f.addDouble(tr("Clip end"), [](const Scene& s) { return s.endTime; },
               [](Scene& s, double v) { s.endTime = std::max(v, s.startTime + kShortestClip); }, -1e3, 1e3, 0.1, 3, tr(" s"));
+  f.addDouble(tr("Frame rate"), [](const Scene& s) { return s.frameRate; },
+              [](Scene& s, double v) { s.frameRate = v; }, 1, Scene::kMaxFrameRate, 1, 2, tr(" fps"));
   f.addVector(tr("Gravity"), [](const Scene& s) { return s.gravity; },
               [](Scene& s, const Eigen::Vector3d& v) { s.gravity = v; }, -100, 100, 0.1, 3);
   f.addBool(tr("Ground"), [](const Scene& s) { return s.groundEnabled; }, [](Scene& s, bool v) { s.groundEnabled = v; });

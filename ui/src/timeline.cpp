@@ -4,6 +4,7 @@
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
+#include <QSignalBlocker>
 #include <QStyle>
 #include <QVBoxLayout>
 #include <cmath>
@@ -216,10 +217,19 @@ Timeline::Timeline(Document* doc, QWidget* parent) : QWidget(parent), doc_(doc) 
   speed_->setToolTip(tr("Playback speed"));
   controls->addWidget(speed_);
   fps_ = new QSpinBox;
-  fps_->setRange(1, 240);
-  fps_->setValue(30);
+  fps_->setRange(1, static_cast<int>(Scene::kMaxFrameRate));
+  fps_->setValue(static_cast<int>(std::lround(doc_->scene().frameRate)));
   fps_->setSuffix(tr(" fps"));
-  fps_->setToolTip(tr("Frame rate for stepping and image-sequence export"));
+  fps_->setToolTip(tr("The scene's frame rate: stepping, image sequences, BVH and glTF export"));
+  // The scene's frame rate, edited here as an undoable scene change (arrow clicks merge).
+  connect(fps_, &QSpinBox::valueChanged, this, [this](int v) {
+    if (std::lround(doc_->scene().frameRate) != v)
+      doc_->edit(tr("Frame rate"), [v](Scene& s) { s.frameRate = v; }, kMergeFrameRate);
+  });
+  connect(doc_, &Document::sceneChanged, this, [this] {
+    const QSignalBlocker quiet(fps_);
+    fps_->setValue(static_cast<int>(std::lround(doc_->scene().frameRate)));
+  });
   controls->addWidget(fps_);
   label_ = new QLabel;
   label_->setMinimumWidth(140);

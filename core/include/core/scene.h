@@ -186,6 +186,10 @@ struct StoredSolution {
 struct Scene {
   std::string name;
   double startTime = 0, endTime = 1;
+  // Frames per second of the animation as shown and exported: the timeline's stepping, PNG
+  // frames, BVH frames and glTF's key grid (scene file: time.frameRate). Not part of the problem.
+  static constexpr double kMaxFrameRate = 1000;
+  double frameRate = 30;
   Eigen::Vector3d gravity = Eigen::Vector3d(0, -9.81, 0);
   bool groundEnabled = true;
   double groundHeight = 0;

@@ -30,7 +30,7 @@ bool checkOutputDirectory(const std::string& dir, std::string* error);
 
 // Frames per second of each motion file. motion.json is for analysis (dense); a BVH at 1000 Hz
 // became a 50 s action in Blender's importer with its default settings (one scene frame per BVH
-// frame at 24 fps), so BVH gets an animation frame rate, the editor's 30 fps. glTF's keys are
+// frame at 24 fps), so BVH gets an animation frame rate (spacetime-cli: the scene's frameRate). glTF's keys are
 // cubic with exact tangents on a grid at the same rate plus the splines' knots (gltfKeyTimes):
 // within 1e-5 m between keys, where linear keys at 30 Hz missed the lamp's head by 1.9 cm.
 struct OutputOptions {

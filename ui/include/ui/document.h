@@ -142,6 +142,7 @@ enum MergeKind : int {
   kMergeBodyField = 3 << 20,
   kMergeTermField = 4 << 20,
   kMergeSceneField = 5 << 20,
+  kMergeFrameRate = 6 << 20,
 };
 
 }  // namespace spacetime::ui
