@@ -44,7 +44,7 @@ constexpr const char* kHelp =
     "Solves a Spacetime scene headless and writes DIR/summary.json, DIR/motion.json, one URDF and\n"
     "one BVH per character, DIR/motion.glb and DIR/scene.json (the scene with the solver's state).\n"
     "  --rate HZ          frames per second of motion.json (default 1000)\n"
-    "  --bvh-rate HZ      frames per second of the BVH files (default: the scene's time.frameRate, 30)\n"
+    "  --bvh-rate HZ      frames per second of the BVH files (default: the scene's time.frameRate, 24)\n"
     "  --gltf-rate HZ     motion.glb's key grid per second (default: the frame rate; cubic keys, plus the\n"
     "                     splines' knots and denser keys in fast motion)\n"
     "  --urdf-z-up        URDF files Z-up (the scene turned +90 degrees about X), so tools'\n"

@@ -19,7 +19,8 @@ for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_s
 done
 
 # Each format at its own rate: motion.json dense for analysis (1000 Hz), the BVH at an animation
-# rate (30 fps: at 1000 Hz Blender's importer, one scene frame per BVH frame, made a 1.2 s jump a 50 s action), glTF keys on a 30 Hz grid;
+# rate (the scene's, 24 fps: Blender's importer makes one frame of its default 24 fps scene of each BVH frame; at 1000 Hz a
+# 1.2 s jump became a 50 s action), glTF keys on a 24 Hz grid;
 # each settable.
 cat > "$tmp/rates.py" <<'PY'
 import json, struct, sys
@@ -44,14 +45,14 @@ grid = [k / gltf for k in range(round(gltf * keys[-1]) + 1)]
 assert all(min(abs(k - g) for k in keys) < 1e-5 for g in grid), ("glTF keys miss the grid", len(keys))
 assert sampler["interpolation"] == "CUBICSPLINE", sampler
 PY
-python3 "$tmp/rates.py" "$tmp/good" 1000 30 30 || fail "default output rates"
+python3 "$tmp/rates.py" "$tmp/good" 1000 24 24 || fail "default output rates"
 "$cli" solve "$scenes/particle.json" --out "$tmp/rates" --rate 200 --bvh-rate 24 --gltf-rate 60 --quiet 2>/dev/null || fail "rates exited $?"
 python3 "$tmp/rates.py" "$tmp/rates" 200 24 60 || fail "--rate, --bvh-rate, --gltf-rate"
 # Without the flags, BVH and glTF follow the scene's frame rate (time.frameRate).
-python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); s["time"]["frameRate"] = 24; json.dump(s, open(sys.argv[2], "w"))' \
+python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); s["time"]["frameRate"] = 30; json.dump(s, open(sys.argv[2], "w"))' \
   "$scenes/particle.json" "$tmp/fps24.json" || fail "could not make the 24 fps scene"
 "$cli" solve "$tmp/fps24.json" --out "$tmp/fps24" --quiet 2>/dev/null || fail "the 24 fps scene exited $?"
-python3 "$tmp/rates.py" "$tmp/fps24" 1000 24 24 || fail "BVH and glTF do not follow the scene's frame rate"
+python3 "$tmp/rates.py" "$tmp/fps24" 1000 30 30 || fail "BVH and glTF do not follow the scene's frame rate"
 # The URDF says its gravity; --urdf-z-up turns it Z-up, where tools' default gravity is the scene's.
 "$cli" solve "$scenes/particle_gravity.json" --out "$tmp/yup" --quiet 2>/dev/null || fail "particle_gravity exited $?"
 grep -q 'gravity is (0 -9.81 0)' "$tmp/yup/particle.urdf" || fail "the default URDF does not say its gravity"

@@ -58,12 +58,12 @@ TEST(SceneIo, SolverMethodAndFrameRateRoundTrip) {
   EXPECT_EQ(r.scene->solver.method, "al");  // the default
   Scene scene = *r.scene;
   scene.solver.method = "ipopt";
-  EXPECT_EQ(scene.frameRate, 30);  // the default
-  scene.frameRate = 24;
+  EXPECT_EQ(scene.frameRate, 24);  // the default
+  scene.frameRate = 30;
   const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
   ASSERT_TRUE(again.scene) << again.error;
   EXPECT_EQ(again.scene->solver.method, "ipopt");
-  EXPECT_EQ(again.scene->frameRate, 24);
+  EXPECT_EQ(again.scene->frameRate, 30);
 }
 
 // A joint axis beyond the loader's magnitude bound is refused, naming the component (its

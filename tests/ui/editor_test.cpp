@@ -265,28 +265,28 @@ class EditorTest : public QObject {
     QVERIFY(bvh.open(QIODevice::ReadOnly));
     const QString text = QString::fromUtf8(bvh.readAll());
     QVERIFY(text.startsWith("HIERARCHY\nROOT "));
-    // At the timeline's rate (30 fps by default), whatever the display samples: the particle's
-    // 1 s clip is 31 frames of 1/30 s.
-    QCOMPARE(w.timeline()->framesPerSecond(), 30);
-    QVERIFY2(text.contains("Frames: 31\n"), qPrintable(text.left(400)));
+    // At the scene's frame rate (the timeline's fps field; 24 by default), whatever the display
+    // samples: the particle's 1 s clip is 25 frames of 1/24 s.
+    QCOMPARE(w.timeline()->framesPerSecond(), 24);
+    QVERIFY2(text.contains("Frames: 25\n"), qPrintable(text.left(400)));
     const QRegularExpressionMatch frameTime = QRegularExpression("Frame Time: ([0-9.eE+-]+)").match(text);
     QVERIFY(frameTime.hasMatch());
-    QVERIFY(std::abs(frameTime.captured(1).toDouble() - 1.0 / 30) < 1e-9);
-    // And at 24 fps: 25 frames.
+    QVERIFY(std::abs(frameTime.captured(1).toDouble() - 1.0 / 24) < 1e-9);
+    // And at 30 fps: 31 frames.
     auto* fps = w.timeline()->findChild<QSpinBox*>();
     QVERIFY(fps);
-    fps->setValue(24);
-    QVERIFY2(w.exportBvh(dir.filePath("bvh24"), &error), qPrintable(error));
-    QFile bvh24(dir.filePath("bvh24/particle.bvh"));
-    QVERIFY(bvh24.open(QIODevice::ReadOnly));
-    const QString text24 = QString::fromUtf8(bvh24.readAll());
-    QVERIFY2(text24.contains("Frames: 25\n"), qPrintable(text24.left(400)));
+    fps->setValue(30);
+    QVERIFY2(w.exportBvh(dir.filePath("bvh30"), &error), qPrintable(error));
+    QFile bvh30(dir.filePath("bvh30/particle.bvh"));
+    QVERIFY(bvh30.open(QIODevice::ReadOnly));
+    const QString text30 = QString::fromUtf8(bvh30.readAll());
+    QVERIFY2(text30.contains("Frames: 31\n"), qPrintable(text30.left(400)));
     // The rate is the scene's (saved with it, one undo step); the solved motion still fits it.
-    QCOMPARE(w.document()->scene().frameRate, 24.0);
+    QCOMPARE(w.document()->scene().frameRate, 30.0);
     QVERIFY(w.document()->showsSolutionOfScene());
     w.document()->undoStack()->undo();
-    QCOMPARE(w.document()->scene().frameRate, 30.0);
-    QCOMPARE(fps->value(), 30);
+    QCOMPARE(w.document()->scene().frameRate, 24.0);
+    QCOMPARE(fps->value(), 24);
   }
 
   // The dock layout survives a restart: closing saves it to QSettings, the next window restores

@@ -188,8 +188,10 @@ struct Scene {
   double startTime = 0, endTime = 1;
   // Frames per second of the animation as shown and exported: the timeline's stepping, PNG
   // frames, BVH frames and glTF's key grid (scene file: time.frameRate). Not part of the problem.
+  // 24 by default, film's rate and a new Blender scene's: its BVH importer makes one scene frame
+  // of each BVH frame, so a 24 fps file imports with the clip's own duration.
   static constexpr double kMaxFrameRate = 1000;
-  double frameRate = 30;
+  double frameRate = 24;
   Eigen::Vector3d gravity = Eigen::Vector3d(0, -9.81, 0);
   bool groundEnabled = true;
   double groundHeight = 0;

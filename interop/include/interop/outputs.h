@@ -35,8 +35,8 @@ bool checkOutputDirectory(const std::string& dir, std::string* error);
 // within 1e-5 m between keys, where linear keys at 30 Hz missed the lamp's head by 1.9 cm.
 struct OutputOptions {
   double motionRate = 1000;  // motion.json
-  double bvhRate = 30;       // <character>.bvh
-  double gltfRate = 30;      // motion.glb's key grid
+  double bvhRate = 24;       // <character>.bvh (spacetime-cli: the scene's frameRate)
+  double gltfRate = 24;      // motion.glb's key grid (the same)
   bool urdfZUp = false;      // the URDF files Z-up (UrdfOptions::zUp)
 };
 
