@@ -1,5 +1,5 @@
-// Expression tape figures (issue 4): instructions per second of the compiled tape, reverse-mode
-// gradient cost relative to one evaluation, and node size. Run a Release build:
+// Expression tape figures: instructions per second of the compiled tape, node size, and the
+// lamp's RNEA as a tape against native code. Run a Release build:
 //   ./build/tests/benchmarks/expr_benchmark --benchmark_repetitions=3
 //     --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -53,17 +53,6 @@ void BM_TapeEvaluate(benchmark::State& state) {
   state.counters["bytes_per_node"] = sizeof(Node);
 }
 
-void BM_TapeGradient(benchmark::State& state) {
-  Graph g;
-  const Tape tape = Tape::compile(g, {buildProgram(g, 4000)}, false);
-  std::vector<double> x(8, 0.3), grad(8), work, adjoint;
-  for (auto _ : state) {
-    tape.gradient(x.data(), 0.0, 0, grad.data(), 8, work, adjoint);
-    benchmark::DoNotOptimize(grad.data());
-  }
-  state.counters["instructions"] = static_cast<double>(tape.length());
-}
-
 Model<double> luxo() {
   const Scene scene = testing::shippedScene("luxo_jump.json");
   return buildModel(scene.characters[0], scene.gravity);
@@ -106,7 +95,6 @@ void BM_NativeRnea(benchmark::State& state) {
 BENCHMARK(BM_SymbolicRneaTape)->Unit(benchmark::kNanosecond);
 BENCHMARK(BM_NativeRnea)->Unit(benchmark::kNanosecond);
 BENCHMARK(BM_TapeEvaluate)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_TapeGradient)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace spacetime::expr

@@ -161,65 +161,6 @@ Expr Graph::simplify(Op op, Expr a, Expr b) {
   return {this, intern(op, a.id, b.id)};
 }
 
-Expr Graph::derivative(Expr e, std::uint32_t variable) {
-  std::unordered_map<std::uint32_t, std::uint32_t> memo;
-  std::function<Expr(std::uint32_t)> d = [&](std::uint32_t id) -> Expr {
-    if (auto it = memo.find(id); it != memo.end()) return {this, it->second};
-    const Node n = nodes_[id];
-    const Expr x{this, n.a}, y{this, n.b}, self{this, id};
-    Expr r;
-    switch (n.op) {
-      case Op::Const:
-      case Op::Time: r = constant(0); break;
-      case Op::Var: r = constant(n.a == variable ? 1 : 0); break;
-      case Op::Add: r = d(n.a) + d(n.b); break;
-      case Op::Sub: r = d(n.a) - d(n.b); break;
-      case Op::Mul: r = d(n.a) * y + x * d(n.b); break;
-      case Op::Div: r = (d(n.a) * y - x * d(n.b)) / (y * y); break;
-      case Op::Neg: r = -d(n.a); break;
-      case Op::Sin: r = cos(x) * d(n.a); break;
-      case Op::Cos: r = -(sin(x) * d(n.a)); break;
-      case Op::Tan: r = (1.0 + self * self) * d(n.a); break;
-      case Op::Exp: r = self * d(n.a); break;
-      case Op::Log: r = d(n.a) / x; break;
-      case Op::Sqrt: r = d(n.a) / (2.0 * self); break;
-      case Op::Abs: r = d(n.a) * make(Op::Div, x, self); break;  // sign(x), undefined at 0
-      case Op::Pow:
-        if (nodes_[n.b].op == Op::Const)
-          r = constantValue(n.b) * pow(x, constantValue(n.b) - 1) * d(n.a);
-        else
-          r = self * (d(n.b) * log(x) + y * d(n.a) / x);
-        break;
-      case Op::Spline: {
-        // d/dx_k sum_j B_j(t) x_j = B_k(t): the basis of control point k, found as the
-        // spline over the indicator of k (one term per occurrence of the variable), plus
-        // the chain rule through time (the next derivative order).
-        SplineTerm term = splines_[n.b];
-        Expr r0 = constant(0);
-        for (size_t k = 0; k < term.controls.size(); ++k)
-          if (term.controls[k] == variable)
-            r0 = r0 + splineBasis(term.spline, static_cast<int>(k), x, term.order);
-        ++term.order;
-        r = r0 + splineNode(term, x) * d(n.a);
-        break;
-      }
-      case Op::Min:
-      case Op::Max: {
-        // The derivative of the selected branch, written without comparisons:
-        // d min(x, y) = (x <= y) dx + (x > y) dy, written without comparisons:
-        // with s = (x - y) / |x - y| in {-1, 1}: dmin = ((1 - s) dx + (1 + s) dy) / 2.
-        const Expr s = (x - y) / abs(x - y);
-        const double sign = n.op == Op::Min ? 1.0 : -1.0;
-        r = ((1.0 - sign * s) * d(n.a) + (1.0 + sign * s) * d(n.b)) * 0.5;
-        break;
-      }
-    }
-    memo.emplace(id, r.id);
-    return r;
-  };
-  return d(e.id);
-}
-
 double Graph::evaluate(Expr e, const std::vector<double>& variables, double t) const {
   const Node& n = nodes_[e.id];
   switch (n.op) {

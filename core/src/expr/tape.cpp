@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <iterator>
 
-#include "core/expr/dual.h"
 #include <stdexcept>
 #include <unordered_map>
 
@@ -93,7 +92,7 @@ Tape Tape::compile(const Graph& g, const std::vector<Expr>& outputs, bool reuseS
 }
 
 std::optional<Op> Tape::firstNonFinite(const double* v, double time) const {
-  checkReverse();
+  checkKeepsEverySlot();
   std::vector<double> w;
   evaluateSlots(v, time, w);
   for (const Instruction& in : code_) {
@@ -105,114 +104,8 @@ std::optional<Op> Tape::firstNonFinite(const double* v, double time) const {
   return std::nullopt;
 }
 
-void Tape::checkReverse() const {
-  if (reuse_) throw std::logic_error("expr::Tape: reverse mode needs a tape compiled without slot reuse");
-}
-
-void Tape::gradient(const double* v, double time, std::size_t output, double* grad,
-                    std::size_t count, std::vector<double>& w, std::vector<double>& adj) const {
-  checkReverse();
-  if (!splines_.empty()) return gradient<double>(v, time, output, grad, count, w, adj);
-  if (w.size() < slots_ + 2 * code_.size()) w.resize(slots_ + 2 * code_.size());
-  double* p = w.data() + slots_;  // two local partials per instruction
-  for (std::size_t i = 0; i < code_.size(); ++i) {
-    const Instruction& in = code_[i];
-    double& d = w[in.dst];
-    double& pa = p[2 * i];
-    double& pb = p[2 * i + 1];
-    const double x = readsSlotA(in.op) ? w[in.a] : 0.0, y = readsSlotB(in.op) ? w[in.b] : 0.0;
-    switch (in.op) {
-      case Op::Const: d = constants_[in.a]; break;
-      case Op::Var: d = v[in.a]; break;
-      case Op::Time: d = time; break;
-      case Op::Add: d = x + y; pa = 1; pb = 1; break;
-      case Op::Sub: d = x - y; pa = 1; pb = -1; break;
-      case Op::Mul: d = x * y; pa = y; pb = x; break;
-      case Op::Div: d = x / y; pa = 1 / y; pb = -d / y; break;
-      case Op::Neg: d = -x; pa = -1; break;
-      case Op::Sin: d = std::sin(x); pa = std::cos(x); break;
-      case Op::Cos: d = std::cos(x); pa = -std::sin(x); break;
-      case Op::Tan: d = std::tan(x); pa = 1 + d * d; break;
-      case Op::Exp: d = std::exp(x); pa = d; break;
-      case Op::Log: d = std::log(x); pa = 1 / x; break;
-      case Op::Sqrt: d = std::sqrt(x); pa = 1 / (2 * d); break;
-      case Op::Abs: d = std::abs(x); pa = x >= 0 ? 1 : -1; break;
-      case Op::Pow:
-        d = std::pow(x, y);
-        pa = y * std::pow(x, y - 1);
-        pb = x > 0 ? d * std::log(x) : 0;
-        break;
-      case Op::Min: d = x < y ? x : y; pa = x < y; pb = !(x < y); break;
-      case Op::Max: d = x < y ? y : x; pa = !(x < y); pb = x < y; break;
-      case Op::Spline: break;  // excluded above
-    }
-  }
-  adj.assign(slots_, 0.0);
-  std::fill(grad, grad + count, 0.0);
-  adj[outputs_[output]] = 1.0;
-  for (std::size_t i = code_.size(); i-- > 0;) {
-    const Instruction& in = code_[i];
-    const double a = adj[in.dst];
-    if (a == 0.0) continue;
-    switch (in.op) {
-      case Op::Const:
-      case Op::Time: break;
-      case Op::Var:
-        if (in.a < count) grad[in.a] += a;
-        break;
-      case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Min:
-      case Op::Max:
-        adj[in.a] += a * p[2 * i];
-        adj[in.b] += a * p[2 * i + 1];
-        break;
-      default: adj[in.a] += a * p[2 * i]; break;
-    }
-  }
-}
-
-void Tape::hessianVectorProduct(const double* x, double time, std::size_t output,
-                                const double* direction, double* product, std::size_t count) const {
-  std::vector<Dual> xd(count), grad(count), work, adjoint;
-  for (std::size_t i = 0; i < count; ++i) xd[i] = Dual(x[i], direction[i]);
-  gradient(xd.data(), Dual(time), output, grad.data(), count, work, adjoint);
-  for (std::size_t i = 0; i < count; ++i) product[i] = grad[i].d;
-}
-
-std::vector<std::vector<std::uint32_t>> Tape::sparsity() const {
-  std::vector<std::vector<std::uint32_t>> deps(slots_);
-  for (const Instruction& in : code_) {
-    std::vector<std::uint32_t> d;
-    switch (in.op) {
-      case Op::Const:
-      case Op::Time: break;
-      case Op::Var: d = {in.a}; break;
-      case Op::Spline: {
-        const SplineTerm& st = splines_[in.b];
-        std::vector<std::uint32_t> controls = st.controls;
-        std::sort(controls.begin(), controls.end());
-        controls.erase(std::unique(controls.begin(), controls.end()), controls.end());
-        std::set_union(controls.begin(), controls.end(), deps[in.a].begin(), deps[in.a].end(),
-                       std::back_inserter(d));
-        break;
-      }
-      default: {
-        const bool binary = in.op == Op::Add || in.op == Op::Sub || in.op == Op::Mul ||
-                            in.op == Op::Div || in.op == Op::Pow || in.op == Op::Min ||
-                            in.op == Op::Max;
-        d = deps[in.a];
-        if (binary) {
-          std::vector<std::uint32_t> merged;
-          std::set_union(d.begin(), d.end(), deps[in.b].begin(), deps[in.b].end(),
-                         std::back_inserter(merged));
-          d = std::move(merged);
-        }
-      }
-    }
-    deps[in.dst] = std::move(d);
-  }
-  std::vector<std::vector<std::uint32_t>> out;
-  for (std::uint32_t s : outputs_) out.push_back(deps[s]);
-  return out;
+void Tape::checkKeepsEverySlot() const {
+  if (reuse_) throw std::logic_error("expr::Tape: reverse mode and firstNonFinite need a tape compiled without slot reuse");
 }
 
 }  // namespace spacetime::expr

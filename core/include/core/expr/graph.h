@@ -5,8 +5,8 @@
 // subexpression is always the same node, and simplified as they are built (constant folding,
 // x+0, x*1, x*0, x-x, -(-x), gathered constants in sums and products). Simplification only ever
 // returns an existing node or one new node, so it never grows the graph beyond what was asked.
-// Expressions are differentiated symbolically (new nodes, simplified) and compiled into a Tape
-// for evaluation (see tape.h).
+// Expressions are compiled into a Tape for evaluation (see tape.h); derivatives come from
+// evaluating the tape on ceres::Jet (forward mode).
 #pragma once
 
 #include <cstdint>
@@ -110,8 +110,6 @@ class Graph {
   std::size_t arenaBytes() const { return nodes_.capacity() * sizeof(Node); }
   std::size_t indexBytes() const;  // the hash index and the constant table, counted apart
 
-  // d expr / d variable(index), simplified.
-  Expr derivative(Expr e, std::uint32_t variable);
   // Direct evaluation by recursion over a node (for tests; use a Tape for speed).
   double evaluate(Expr e, const std::vector<double>& variables, double t = 0) const;
   std::string toString(Expr e) const;

@@ -1,8 +1,9 @@
 // A compiled expression: the reachable nodes of some outputs in topological order as a flat
 // list of instructions over numbered slots, evaluated by one tight loop. Compiled with slot
 // reuse (a slot is recycled after its last reader) for plain evaluation, or with one slot per
-// instruction for reverse mode, which needs every intermediate value. Evaluation is a template
-// on the scalar, so ceres::Jet flows through it (forward mode) as doubles do.
+// instruction for reverse mode and for finding where a NaN or an infinity is born
+// (firstNonFinite), which need every intermediate value. Evaluation is a template on the scalar, so ceres::Jet flows through it
+// (forward mode: the solver's exact Jacobians of formula terms) as doubles do.
 #pragma once
 
 #include <cmath>
@@ -10,7 +11,6 @@
 #include <type_traits>
 #include <vector>
 
-#include "core/expr/dual.h"
 #include "core/expr/graph.h"
 
 namespace spacetime::expr {
@@ -21,17 +21,16 @@ struct Instruction {
 };
 
 // Whether an instruction's `a` and `b` are slots: Const, Var and Time read other tables, unary
-// operations have no `b`, and a Spline's `b` indexes the tape's splines. The reverse sweeps read
-// the operands only where they are slots (reading them always ran past the slots: ASan).
+// operations have no `b`, and a Spline's `b` indexes the tape's splines. Sweeps over the slots
+// read the operands only where they are slots (reading them always ran past the slots: ASan).
 inline bool readsSlotA(Op op) { return op != Op::Const && op != Op::Var && op != Op::Time; }
 inline bool readsSlotB(Op op) {
   return op == Op::Add || op == Op::Sub || op == Op::Mul || op == Op::Div || op == Op::Pow || op == Op::Min ||
          op == Op::Max;
 }
 
-// The plain value of a scalar (double, ceres::Jet, Dual): what a spline's basis is looked up at.
+// The plain value of a scalar (double, ceres::Jet): what a spline's basis is looked up at.
 inline double valueOf(double x) { return x; }
-inline double valueOf(const Dual& x) { return x.v; }
 template <class T>
 auto valueOf(const T& x) -> decltype(x.a) {
   return x.a;
@@ -50,29 +49,16 @@ class Tape {
   void evaluate(const T* variables, const T& time, T* outputs, std::vector<T>& work) const;
 
   // Reverse mode: gradient of output `output` with respect to the variables (size `count`).
-  // Requires a tape compiled without slot reuse. A template so that running it on dual
-  // numbers gives forward-over-reverse second derivatives.
+  // Requires a tape compiled without slot reuse. A template so that running it on Jets gives
+  // forward-over-reverse second derivatives (the dynamics kernel's exact Hessian, kernels.cpp).
   template <class T>
   void gradient(const T* variables, const T& time, std::size_t output, T* gradient,
                 std::size_t count, std::vector<T>& work, std::vector<T>& adjoint) const;
-
-  // The double case records each instruction's local partials during the forward pass (in
-  // `work`, after the slots: the tape itself holds no scratch, so threads may share it), so
-  // the reverse pass is only multiply-adds (Griewank & Walther, ch. 3).
-  void gradient(const double* variables, double time, std::size_t output, double* gradient,
-                std::size_t count, std::vector<double>& work, std::vector<double>& adjoint) const;
-
-  // Hessian of output `output` times `direction` (forward-over-reverse).
-  void hessianVectorProduct(const double* variables, double time, std::size_t output,
-                            const double* direction, double* product, std::size_t count) const;
 
   // Where a NaN or an infinity is born: the operation of the first instruction whose value is
   // not finite though its operands are (nullopt if every value is finite). Needs a tape compiled
   // without slot reuse, which keeps every intermediate value.
   std::optional<Op> firstNonFinite(const double* variables, double time) const;
-
-  // The sorted variable indices each output depends on (its Jacobian's sparsity pattern).
-  std::vector<std::vector<std::uint32_t>> sparsity() const;
 
  private:
   std::vector<Instruction> code_;
@@ -81,7 +67,7 @@ class Tape {
   std::vector<std::uint32_t> outputs_;  // slots
   std::size_t slots_ = 0;
   bool reuse_ = true;
-  void checkReverse() const;
+  void checkKeepsEverySlot() const;  // throws for a tape compiled with slot reuse
   // Runs the instructions, leaving every slot's value in w.
   template <class T>
   void evaluateSlots(const T* variables, const T& time, std::vector<T>& w) const;
@@ -153,7 +139,7 @@ void Tape::gradient(const T* v, const T& time, std::size_t output, T* grad, std:
   using std::log;
   using std::pow;
   using std::sin;
-  checkReverse();
+  checkKeepsEverySlot();
   evaluateSlots(v, time, w);
   adj.assign(slots_, T(0.0));
   for (std::size_t i = 0; i < count; ++i) grad[i] = T(0.0);
