@@ -3,7 +3,8 @@
 # glTF Validator (npm) the tests check exported glTF with, into .cache/ (not committed). clang is
 # for the scene loader's fuzzer (scripts/fuzz.sh, and a 60 s run in the tests); IPOPT
 # (coinor-libipopt-dev) for the interior-point method (`--method ipopt`); Pinocchio (pip, into
-# .cache/python) for a test.
+# .cache/python) for a test. `install-deps.sh --with-blender` also installs Blender's Python
+# module (pip bpy, about 1 GB, into .cache/bpy) for an optional BVH import test.
 set -euo pipefail
 packages=(cmake ninja-build g++ clang ccache pkg-config
           libeigen3-dev libceres-dev nlohmann-json3-dev coinor-libipopt-dev
@@ -45,4 +46,16 @@ if ! python3 -c "import site; site.addsitedir('$python_dir'); import pinocchio; 
     true
   python3 -c "import site; site.addsitedir('$python_dir'); import pinocchio" 2>/dev/null ||
     echo "warning: could not install Pinocchio; pinocchio_z_up_urdf will fail" >&2
+fi
+
+# Optional (--with-blender): Blender as a Python module (pip bpy, about 1 GB) for the test that
+# imports a solved BVH with Blender's default settings (tests/interop/blender_bvh_check.py; the
+# test exists when .cache/bpy does).
+if [ "${1:-}" = "--with-blender" ]; then
+  bpy_dir="$(cd "$(dirname "$0")/.." && pwd)/.cache/bpy"
+  if ! python3 -c "import site; site.addsitedir('$bpy_dir'); import bpy" 2>/dev/null; then
+    echo "installing Blender 5.0.1 (pip bpy) into $bpy_dir"
+    python3 -m pip install --quiet --disable-pip-version-check --target "$bpy_dir" "bpy==5.0.1" 2>&1 |
+      grep -v "Running pip as the 'root' user" || true
+  fi
 fi

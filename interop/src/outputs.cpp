@@ -303,7 +303,7 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
   // Build every file's contents first, then write them; a failure names the file.
   std::vector<std::pair<std::string, std::string>> files;
   const Animation animation = sampleAnimation(problem, options.motionRate);
-  const Animation bvhFrames = sampleAnimation(problem, options.bvhRate);
+  const Animation bvhFrames = sampleAnimationAt(problem, frameTimes(problem.scene(), options.bvhRate));
   const Animation gltfKeys = sampleAnimationAt(problem, gltfKeyTimes(problem, options.gltfRate));
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const Model<double>& model = *problem.characters()[c].model;

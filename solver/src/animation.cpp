@@ -26,6 +26,13 @@ Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz) {
   return sampleAnimationAt(problem, times);
 }
 
+std::vector<double> frameTimes(const Scene& scene, double rateHz) {
+  const int last = std::max(1, static_cast<int>(std::floor((scene.endTime - scene.startTime) * rateHz + 1e-9)));
+  std::vector<double> times;
+  for (int f = 0; f <= last; ++f) times.push_back(std::min(scene.startTime + f / rateHz, scene.endTime));
+  return times;
+}
+
 Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<double>& times) {
   Animation anim;
   const Scene& scene = problem.scene();

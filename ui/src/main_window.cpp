@@ -431,7 +431,8 @@ bool MainWindow::exportBvh(const QString& directory, QString* error) {
   // frame, so the display's 120 Hz samples played a 1.2 s jump over 6 s at 24 fps. The motion is
   // sampled again from its solution at that rate (its spline, not an interpolation of samples).
   const double rate = doc_.scene().frameRate;
-  const Animation animation = resampled(*motion, [&](const SpacetimeProblem& p) { return sampleAnimation(p, rate); });
+  const Animation animation =
+      resampled(*motion, [&](const SpacetimeProblem& p) { return sampleAnimationAt(p, frameTimes(p.scene(), rate)); });
   return writeCharacterFiles(directory, "bvh", error, [&](size_t i, const CharacterSpec& c, const Model<double>& model) {
     return motionBvh(model, c, animation.characters[i]);
   });

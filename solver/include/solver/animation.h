@@ -46,6 +46,10 @@ struct Animation {
 
 // Samples the problem's current solution at `rateHz` frames per second (both ends included).
 Animation sampleAnimation(const SpacetimeProblem& problem, double rateHz);
+// Frames exactly 1/rateHz apart from the clip's start, the last at or before its end: a frame
+// grid an importer that assumes a fixed frame time plays in real time (BVH). Where the clip is
+// not a whole number of frames the last one falls short of the end by less than a frame.
+std::vector<double> frameTimes(const Scene& scene, double rateHz);
 // The same at the given times (the validity report's checks at chosen instants).
 Animation sampleAnimationAt(const SpacetimeProblem& problem, const std::vector<double>& times);
 
