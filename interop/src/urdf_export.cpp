@@ -99,8 +99,10 @@ UrdfExport exportUrdf(const Model<double>& model, const CharacterSpec& character
       << ". -->\n";
   out << "<robot name=\"" << model.name << "\">\n";
   // MuJoCo refuses moving bodies without mass; its own extension lifts only the massless
-  // virtual links to 1e-12 kg (other URDF readers ignore the element).
-  out << "  <mujoco><compiler boundmass=\"1e-12\" boundinertia=\"1e-14\" discardvisual=\"true\"/></mujoco>\n";
+  // virtual links to 1e-12 kg, and carries the gravity, which MuJoCo then needs no setting for
+  // (other URDF readers ignore the element).
+  out << "  <mujoco><option gravity=\"" << vec(gravity)
+      << "\"/><compiler boundmass=\"1e-12\" boundinertia=\"1e-14\" discardvisual=\"true\"/></mujoco>\n";
   out << "  <link name=\"" << world << "\"/>\n";
   if (options.zUp) out << "  <link name=\"" << rootParent << "\"/>\n";
   for (int i = 0; i < model.bodyCount(); ++i) {

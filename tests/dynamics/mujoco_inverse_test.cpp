@@ -20,8 +20,8 @@ namespace {
 
 // Loads the URDF into MuJoCo, compares mj_inverse with our RNEA; returns the worst relative
 // error over `states` random states.
-// With zUp the file is the Z-up export and MuJoCo keeps its default gravity (0, 0, -9.81),
-// which must then be the scene's gravity turned into that frame.
+// MuJoCo takes the gravity from the file (<mujoco><option gravity/>): nothing is set here. With
+// zUp the file is the Z-up export.
 double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d& gravity,
                           int states, unsigned seed, bool zUp = false) {
   const Model<double> model = buildModel(character, gravity);
@@ -35,8 +35,8 @@ double worstRelativeError(const CharacterSpec& character, const Eigen::Vector3d&
   EXPECT_NE(m, nullptr) << error;
   if (!m) return 1e9;
   m->opt.disableflags |= mjDSBL_CONSTRAINT | mjDSBL_CONTACT | mjDSBL_PASSIVE;
-  if (!zUp)
-    for (int k = 0; k < 3; ++k) m->opt.gravity[k] = gravity[k];
+  const Eigen::Vector3d expected = zUp ? Eigen::Vector3d(yUpToZUp() * gravity) : gravity;
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(m->opt.gravity[k], expected[k], 1e-12);
   mjData* d = mj_makeData(m);
   EXPECT_EQ(m->nv, model.dofCount());
   const testing::MujocoDofs adr = testing::mujocoDofs(m, model.dofNames());
@@ -69,8 +69,8 @@ TEST(MujocoInverse, ShippedCharactersAgree) {
   }
 }
 
-// The Z-up export: MuJoCo with its default gravity (along -Z) reproduces our inverse dynamics
-// under the scene's (0, -9.81, 0). Both files say their gravity in a comment.
+// The Z-up export: MuJoCo reproduces our inverse dynamics under the scene's (0, -9.81, 0) with
+// the gravity along -Z that is its default. Both files say their gravity in a comment.
 TEST(MujocoInverse, ZUpExportNeedsNoGravitySetting) {
   for (const char* scene : {"luxo_jump.json", "luxo_3d.json"}) {
     const Scene s = testing::shippedScene(scene);

@@ -19,7 +19,8 @@ struct UrdfExport {
 // The scene is Y-up; URDF readers (MuJoCo, Pinocchio, ROS) pull along -Z unless told. zUp
 // turns the character +90 degrees about X under a fixed joint from the world link (the scene's
 // Y becomes Z), so that their default gravity is the scene's (0, -9.81, 0); the dofs are the
-// same. Either way a comment in the file gives the gravity vector in its frame.
+// same. Either way a comment in the file gives the gravity vector in its frame, and MuJoCo's
+// extension element (<mujoco><option gravity=.../>) sets it for MuJoCo.
 struct UrdfOptions {
   bool zUp = false;
 };
