@@ -25,6 +25,7 @@
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 #include "interop/outputs.h"
+#include "solver/interior_point.h"
 #include "solver/refinement.h"
 #include "solver/validity.h"
 
@@ -185,6 +186,15 @@ int run(int argc, char** argv) {
   options.spentSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   options.newtonPolish = polish;
   if (!method.empty()) parseSolverMethod(method, &options.method);
+  // What the interior point cannot take is refused before anything is solved or written.
+  if (options.method == SolverMethod::InteriorPoint) {
+    if (!interiorPointAvailable()) return usage("--method ipopt: this build has no IPOPT (install coinor-libipopt-dev and rebuild)");
+    if (!problem->freeEnds().empty()) {
+      std::fprintf(stderr, "spacetime-cli: %s: the interior-point method does not handle free contact ends (freeEnd); use --method al\n",
+                   scenePath.c_str());
+      return 2;
+    }
+  }
   if (start) {
     const StoredSolution& s = *start->solution;
     const SpacetimeProblem::WarmStart how = problem->warmStartFrom(*start, {s.variables, s.multipliers, s.rho});

@@ -74,6 +74,12 @@ python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); s.setdefault("so
 grep -q '"method": "ipopt"' "$tmp/ip_scene/summary.json" || fail "the scene's solver.method was not used"
 "$cli" solve "$tmp/ip_scene.json" --out "$tmp/ip_override" --method al --quiet 2>/dev/null || fail "--method al exited $?"
 grep -q '"method": "al"' "$tmp/ip_override/summary.json" || fail "--method al did not override the scene"
+python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); [t.update(freeEnd=True) for t in s["terms"] if t["id"] == "takeoff"]; json.dump(s, open(sys.argv[2], "w"))' \
+  "$scenes/luxo_jump.json" "$tmp/free_end.json" || fail "could not make the free-end scene"
+"$cli" solve "$tmp/free_end.json" --out "$tmp/free_ip" --method ipopt 2>"$tmp/free_ip.err"; status=$?
+[ "$status" -eq 2 ] || fail "--method ipopt with a free end exited $status, expected 2"
+grep -q "does not handle free contact ends" "$tmp/free_ip.err" || fail "unclear free-end error: $(cat "$tmp/free_ip.err")"
+[ ! -e "$tmp/free_ip" ] || fail "the refused free-end solve wrote outputs"
 "$cli" solve "$scenes/particle.json" --out "$tmp/nomethod" --method newton 2>"$tmp/nomethod.err"; status=$?
 [ "$status" -eq 2 ] || fail "--method newton exited $status, expected 2"
 grep -q -- "--method must be al or ipopt" "$tmp/nomethod.err" || fail "unclear --method error: $(cat "$tmp/nomethod.err")"
