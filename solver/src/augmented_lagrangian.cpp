@@ -111,6 +111,12 @@ std::string SolverOptions::validate() const {
   return "";
 }
 
+std::chrono::steady_clock::time_point SolverOptions::deadlineFrom(std::chrono::steady_clock::time_point start) const {
+  using Clock = std::chrono::steady_clock;
+  return start + std::chrono::duration_cast<Clock::duration>(
+                     std::chrono::duration<double>(std::clamp(maxSeconds - spentSeconds, 0.0, 1e9)));
+}
+
 std::string toString(SolveStatus s) {
   switch (s) {
     case SolveStatus::Converged: return "converged";
@@ -196,6 +202,18 @@ std::vector<ViolatedConstraint> mostViolated(const SpacetimeProblem& problem, do
   return out;
 }
 
+std::vector<ViolatedConstraint> unmetConstraints(const SpacetimeProblem& problem, double tolerance, double maxViolation) {
+  if (!(maxViolation > tolerance)) return {};
+  return mostViolated(problem, std::max(tolerance, 0.1 * maxViolation), 5);
+}
+
+std::string describeViolated(const std::vector<ViolatedConstraint>& violated) {
+  std::ostringstream most;
+  for (size_t i = 0; i < violated.size(); ++i)
+    most << (i ? ", " : "; most violated: ") << violated[i].label << " (" << violated[i].violation << ")";
+  return most.str();
+}
+
 SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
                              const ProgressCallback& callback, const std::atomic<bool>* cancel) {
   const Clock::time_point start = Clock::now();
@@ -233,8 +251,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // 20.0 s, 3903 iterations without, the same optimum (objective 16.8563).
   co.max_num_line_search_step_size_iterations = 0;
   // The solve's wall-clock limit, for the Ceres iterations and the Newton polish alike.
-  const Clock::time_point deadline =
-      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::clamp(options.maxSeconds - options.spentSeconds, 0.0, 1e9)));
+  const Clock::time_point deadline = options.deadlineFrom(start);
   ProgressForwarder forwarder(problem, callback, cancel, start, deadline);
   co.callbacks.push_back(&forwarder);
 
@@ -421,14 +438,10 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     summary.reason = "constraints within tolerance, but the augmented Lagrangian was not yet "
                      "stationary after " + std::to_string(options.maxOuterIterations) +
                      " multiplier updates (the objective may still improve)";
-  if (!summary.converged && m.maxViolation > options.tolerance) {
-    summary.violated = mostViolated(problem, std::max(options.tolerance, 0.1 * m.maxViolation), 5);
-    if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Stalled) {
-      std::ostringstream most;
-      for (size_t i = 0; i < summary.violated.size(); ++i)
-        most << (i ? ", " : "; most violated: ") << summary.violated[i].label << " (" << summary.violated[i].violation << ")";
-      summary.reason += most.str();
-    }
+  if (!summary.converged) {
+    summary.violated = unmetConstraints(problem, options.tolerance, m.maxViolation);
+    if (summary.status == SolveStatus::IterationLimit || summary.status == SolveStatus::Stalled)
+      summary.reason += describeViolated(summary.violated);
   }
   summary.objective = m.objective;
   summary.maxViolation = m.maxViolation;

@@ -29,6 +29,8 @@ using raw::Vec;
 using Ipopt::Index;
 using Ipopt::Number;
 
+constexpr int kMaxIterations = 3000;
+
 // The lower triangle of the Lagrangian's Hessian in a pattern fixed at the start: every pair of
 // tangent columns a kernel's nonlinear inputs read, and the pattern of J_r^T J_r. Each term's
 // dense weighted Hessian and each entry of J_r^T J_r know their slot, so assembly is a scatter.
@@ -116,7 +118,6 @@ class SpacetimeNlp : public Ipopt::TNLP {
   }
   bool ok() const { return ok_; }
   int iterations() const { return iterations_; }
-  Ipopt::SolverReturn status() const { return status_; }
   double evaluationSeconds() const { return evaluationSeconds_; }
   double hessianSeconds() const { return hessianSeconds_; }
   bool cancelled() const { return cancelled_; }
@@ -191,10 +192,9 @@ class SpacetimeNlp : public Ipopt::TNLP {
     hessianSeconds_ += secondsSince(t0);
     return std::all_of(values, values + nnz, [](double v) { return std::isfinite(v); });
   }
-  void finalize_solution(Ipopt::SolverReturn status, Index n, const Number* x, const Number*, const Number*, Index m,
+  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index m,
                          const Number*, const Number* lambda, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
-    status_ = status;
     // The last iterate if it is finite, else the starting variables: never a NaN motion.
     const Eigen::Map<const Vec> step(x, n);
     if (step.allFinite()) {
@@ -293,7 +293,6 @@ class SpacetimeNlp : public Ipopt::TNLP {
 
   int iterations_ = 0;
   bool cancelled_ = false, timedOut_ = false;
-  Ipopt::SolverReturn status_ = Ipopt::UNASSIGNED;
   double evaluationSeconds_ = 0, hessianSeconds_ = 0;
 };
 
@@ -306,7 +305,7 @@ bool configure(Ipopt::IpoptApplication& app, const SolverOptions& options) {
   app.Options()->SetNumericValue("tol", 1e-8);
   app.Options()->SetNumericValue("constr_viol_tol", options.tolerance);
   app.Options()->SetNumericValue("acceptable_constr_viol_tol", options.tolerance);
-  app.Options()->SetIntegerValue("max_iter", 3000);
+  app.Options()->SetIntegerValue("max_iter", kMaxIterations);
   // MUMPS with approximate minimum degree: the shipped jump 9.4 -> 6.6 s against its automatic
   // choice (METIS 9.4 s); the adaptive barrier update takes 88 iterations, the monotone one 170.
   app.Options()->SetIntegerValue("mumps_pivot_order", 0);
@@ -335,12 +334,9 @@ SolverSummary solveInteriorPoint(SpacetimeProblem& problem, const SolverOptions&
     summary.objective = m.objective;
     summary.maxViolation = m.maxViolation;
     summary.worstConstraint = m.worstConstraint;
-    if (!summary.converged && m.maxViolation > options.tolerance) {
-      summary.violated = mostViolated(problem, std::max(options.tolerance, 0.1 * m.maxViolation), 5);
-      std::ostringstream most;
-      for (size_t i = 0; i < summary.violated.size(); ++i)
-        most << (i ? ", " : "; most violated: ") << summary.violated[i].label << " (" << summary.violated[i].violation << ")";
-      summary.reason += most.str();
+    if (!summary.converged) {
+      summary.violated = unmetConstraints(problem, options.tolerance, m.maxViolation);
+      summary.reason += describeViolated(summary.violated);
     }
     summary.solveSeconds = secondsSince(start);
     return summary;
@@ -348,10 +344,7 @@ SolverSummary solveInteriorPoint(SpacetimeProblem& problem, const SolverOptions&
   if (!problem.freeEnds().empty())
     return finish(SolveStatus::InvalidOptions,
                   "the interior-point method does not handle free contact ends (freeEnd); use the augmented Lagrangian");
-  const Clock::time_point deadline =
-      start + std::chrono::duration_cast<Clock::duration>(
-                  std::chrono::duration<double>(std::clamp(options.maxSeconds - options.spentSeconds, 0.0, 1e9)));
-  Ipopt::SmartPtr<SpacetimeNlp> nlp = new SpacetimeNlp(problem, options, callback, cancel, deadline);
+  Ipopt::SmartPtr<SpacetimeNlp> nlp = new SpacetimeNlp(problem, options, callback, cancel, options.deadlineFrom(start));
   if (!nlp->ok()) return finish(SolveStatus::NumericalFailure, "a row is not finite at the starting motion");
 
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
@@ -382,7 +375,8 @@ SolverSummary solveInteriorPoint(SpacetimeProblem& problem, const SolverOptions&
       return finish(SolveStatus::Stalled, "the constraints conflict: the restoration phase ended at a positive minimum "
                                           "of the violation after " + steps.str());
     case Ipopt::Maximum_Iterations_Exceeded:
-      return finish(SolveStatus::IterationLimit, "reached the limit of 3000 interior-point iterations");
+      return finish(SolveStatus::IterationLimit,
+                    "reached the limit of " + std::to_string(kMaxIterations) + " interior-point iterations");
     case Ipopt::Restoration_Failed:
       return finish(SolveStatus::Stalled, "the restoration phase could not reduce the violation after " + steps.str());
     default: {

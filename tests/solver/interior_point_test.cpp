@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "../shipped_scene.h"
+#include "clashing_pin.h"
 #include "particle_optimum.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/interior_point.h"
@@ -73,10 +74,7 @@ TEST(InteriorPoint, LuxoJumpIsValidAndNoWorseThanTheAugmentedLagrangian) {
 TEST(InteriorPoint, ContradictoryPinsAreNamed) {
   if (!interiorPointAvailable()) GTEST_SKIP() << "built without IPOPT (coinor-libipopt-dev)";
   Scene scene = testing::shippedScene("particle.json");
-  TermSpec clash = scene.terms[1];
-  clash.id = "clash";
-  clash.position = Eigen::Vector3d(5, 5, 5);  // same time as p1, another place
-  scene.terms.push_back(clash);
+  testing::addClashingPin(scene);
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
   ASSERT_TRUE(problem) << error;

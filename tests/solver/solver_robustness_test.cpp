@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "../shipped_scene.h"
+#include "clashing_pin.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
 
@@ -112,10 +113,7 @@ TEST(SolverRobustness, InvalidOptionsAreReported) {
 TEST(SolverRobustness, ContradictoryPinsStopAndAreNamed) {
   Scene scene;
   auto unused = load("particle.json", &scene);
-  TermSpec clash = scene.terms[1];
-  clash.id = "clash";
-  clash.position = Eigen::Vector3d(5, 5, 5);  // same time as p1, another place
-  scene.terms.push_back(clash);
+  const TermSpec clash = testing::addClashingPin(scene);
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
   ASSERT_TRUE(problem) << error;

@@ -264,7 +264,7 @@ void Timeline::togglePlay() { isPlaying() ? pause() : play(); }
 
 void Timeline::step(int frames) {
   pause();
-  const double dt = 1.0 / fps_->value();
+  const double dt = 1.0 / doc_->scene().frameRate;
   // Snap to the frame grid so stepping lands on the frames an export would write.
   const double s = doc_->scene().startTime;
   const double frame = std::round((doc_->currentTime() - s) / dt) + frames;

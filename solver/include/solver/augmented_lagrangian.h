@@ -10,6 +10,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -80,6 +81,8 @@ struct SolverOptions {
   int stallUpdates = 10;
 
   std::string validate() const;  // empty if valid, else what is wrong
+  // The wall-clock instant a solve started at `start` must stop: maxSeconds less spentSeconds.
+  std::chrono::steady_clock::time_point deadlineFrom(std::chrono::steady_clock::time_point start) const;
 };
 
 // The options a scene asks for (its `solver` block); the rest keep their defaults.
@@ -148,6 +151,11 @@ ProblemMeasures measure(const SpacetimeProblem& problem);
 // The constraints violated by more than `floor` at the problem's current variables, largest
 // first, at most `limit`.
 std::vector<ViolatedConstraint> mostViolated(const SpacetimeProblem& problem, double floor, int limit);
+// The unmet constraints of a solve that stopped short at `maxViolation`: those above the
+// tolerance and a tenth of the largest, at most five (SolverSummary::violated).
+std::vector<ViolatedConstraint> unmetConstraints(const SpacetimeProblem& problem, double tolerance, double maxViolation);
+// "; most violated: LABEL (VIOLATION), ..." for a stop reason; empty for none.
+std::string describeViolated(const std::vector<ViolatedConstraint>& violated);
 
 std::string toString(SolveStatus s);
 std::string toString(SolverMethod m);  // "al", "ipopt": the names the CLI and scenes use

@@ -52,7 +52,7 @@ class Timeline : public QWidget {
   void pause();
   void togglePlay();
   void step(int frames);
-  int framesPerSecond() const { return fps_->value(); }  // the scene's frame rate
+  int framesPerSecond() const { return fps_->value(); }  // the scene's frame rate, rounded
   double speed() const;
   bool loops() const { return loop_->isChecked(); }
   TimelineBar* bar() const { return bar_; }
