@@ -2,7 +2,7 @@
 # Re-measures every speed figure docs/performance.md and the README quote, on this machine, from
 # the Release build: the solve and expression benchmarks (medians of 5 repetitions) and the jump
 # ladder through spacetime-cli (single runs: the rungs take seconds to tens of seconds). Prints
-# the tables in the documents' form. Takes about 10 minutes on the 2-core machine.
+# the tables in the documents' form. Takes about 12 minutes on the 2-core machine.
 #
 #   scripts/measure.sh            everything
 #   scripts/measure.sh benchmarks the benchmarks only

@@ -23,6 +23,7 @@
 #include <QSpinBox>
 #include <QTemporaryDir>
 #include <QTimer>
+#include <QToolButton>
 #include <QtTest>
 #include <cstring>
 #include <map>
@@ -1006,6 +1007,30 @@ class EditorTest : public QObject {
     const glm::mat4& m = withBox.obstacles[0].boxes[0].transform;
     const glm::vec3 lo = glm::vec3(m * glm::vec4(-0.5f, -0.5f, -0.5f, 1.0f)), hi = glm::vec3(m * glm::vec4(0.5f, 0.5f, 0.5f, 1.0f));
     QVERIFY(glm::length(lo - glm::vec3(0.1f, 0.0f, -0.2f)) < 1e-6f && glm::length(hi - glm::vec3(0.3f, 0.15f, 0.2f)) < 1e-6f);
+  }
+
+  // The builder's Planar biped preset, chosen from its menu on an empty scene, solves in the
+  // editor to a motion the Validity panel calls physically valid: a 9-dof character standing on
+  // two feet with two-point contacts, which no lamp preset exercises.
+  void bipedPresetSolvesValid() {
+    MainWindow w;
+    w.solveOnOpen = false;
+    w.document()->reset(emptyScene(), {});
+    QAction* biped = nullptr;
+    for (QToolButton* button : w.builder()->findChildren<QToolButton*>())
+      if (button->text() == "Presets" && button->menu())
+        for (QAction* a : button->menu()->actions())
+          if (a->text() == "Planar biped") biped = a;
+    QVERIFY(biped);
+    biped->trigger();
+    const Scene& scene = w.document()->scene();
+    QCOMPARE(scene.characters.size(), size_t(1));
+    QCOMPARE(scene.characters[0].bodies.size(), size_t(7));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(240000));
+    QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
+    QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
+    QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
   }
 
   // File > Open Example lists every scene in resources/scenes by its name, and each opens

@@ -81,6 +81,7 @@ BuilderPanel::BuilderPanel(Document* doc, QWidget* parent) : QWidget(parent), do
   menu->addAction(tr("Particle"), this, [this] { applyPreset(":/scenes/particle.json"); });
   menu->addAction(tr("Planar Luxo"), this, [this] { applyPreset(":/scenes/luxo_jump.json"); });
   menu->addAction(tr("3D Luxo"), this, [this] { applyPreset(":/scenes/luxo_3d.json"); });
+  menu->addAction(tr("Planar biped"), this, [this] { applyPreset(":/scenes/biped_jump.json"); });
   presets->setMenu(menu);
   buttons->addWidget(presets);
   buttons->addStretch();

@@ -122,6 +122,14 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
     }
   };
   drawCharacters(o.time, false, 1.0f);
+  // The bodies' whole shapes at the current time belong in the bounds, not only their origins:
+  // a biped's torso box reaches 0.5 m above its root, and Frame all cut it off.
+  for (const Solid& s : rs.solids)
+    if (!s.body.empty())
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 unit((corner & 1) ? 0.5f : -0.5f, (corner & 2) ? 0.5f : -0.5f, (corner & 4) ? 0.5f : -0.5f);
+        grow(rs, glm::vec3(s.transform * glm::vec4(unit, 1.0f)), firstBound);
+      }
   if (motion && o.ghosts > 0)
     for (int k = -o.ghosts; k <= o.ghosts; ++k) {
       const double t = o.time + k * o.ghostSpacing;
