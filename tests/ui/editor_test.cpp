@@ -35,6 +35,7 @@
 #include "core/scene_io.h"
 #include "core/shape_mesh.h"
 #include "solver/interior_point.h"
+#include "solver/spacetime_problem.h"
 #include "ui/main_window.h"
 #include "ui/render_scene.h"
 #include "ui/solved_motion.h"
@@ -1056,6 +1057,102 @@ class EditorTest : public QObject {
     }
     QCOMPARE(listed, shipped);
     QVERIFY(shipped.size() >= 7);
+  }
+
+  // Posing: with the pose tool (R), a drag on the lamp's head around its joint turns j3 by the
+  // angle the mouse sweeps around the joint on screen, and nothing else; the viewport shows
+  // the pose; K at t = 0 replaces the start key with it (one key there, not two), and that pose
+  // is the pose the solve starts from (the default guess through the keys) and the solved motion
+  // meets. Changing the time drops a pose not keyed.
+  void poseToolTurnsAJointAndKKeysIt() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    w.viewport()->frameAll();
+    Document& doc = *w.document();
+    QVERIFY(!doc.motion());
+    QAction* poseTool = w.findChild<QAction*>("poseTool");
+    QVERIFY(poseTool);
+    poseTool->trigger();
+    QVERIFY(w.viewport()->poseTool());
+    const Model<double>& model = doc.models()[0];
+    const Eigen::VectorXd before = doc.posesNow()[0];
+    const int head = model.bodyIndex("head");
+    const std::optional<PoseJoint> joint = poseJoint(model, before, head);
+    QVERIFY(joint);
+    QCOMPARE(joint->dof, model.dofIndex("j3"));
+    glm::vec3 centre(0.0f);
+    for (const Solid& s : w.viewport()->renderScene().solids)
+      if (s.body == "head" && !s.ghost) centre = glm::vec3(s.transform[3]);
+    const QPointF c = w.viewport()->toPixel(glm::vec3(joint->pivot.x(), joint->pivot.y(), joint->pivot.z()));
+    const QPointF p0 = w.viewport()->toPixel(centre);
+    const double radius = std::hypot(p0.x() - c.x(), p0.y() - c.y());
+    QVERIFY(radius > 10);
+    // An arc of +0.3 rad (counter-clockwise on screen) around the joint, in 10 moves.
+    const double a0 = std::atan2(-(p0.y() - c.y()), p0.x() - c.x()), sweep = 0.3;
+    auto at = [&](double a) { return QPointF(c.x() + radius * std::cos(a), c.y() - radius * std::sin(a)); };
+    QTest::mousePress(w.viewport(), Qt::LeftButton, {}, p0.toPoint());
+    for (int k = 1; k <= 10; ++k) {
+      const QPointF p = at(a0 + sweep * k / 10);
+      QMouseEvent move(QEvent::MouseMove, p, w.viewport()->mapToGlobal(p), Qt::NoButton, Qt::LeftButton, Qt::NoModifier);
+      QApplication::sendEvent(w.viewport(), &move);
+    }
+    QTest::mouseRelease(w.viewport(), Qt::LeftButton, {}, at(a0 + sweep).toPoint());
+    QVERIFY(doc.posed());
+    QCOMPARE(doc.selectedBody(), std::string("head"));
+    const Eigen::VectorXd posed = doc.posed()->q;
+    const glm::vec3 toViewer = w.viewport()->camera().eye() - w.viewport()->camera().target;
+    const double sign = glm::dot(glm::vec3(joint->axis.x(), joint->axis.y(), joint->axis.z()), toViewer) > 0 ? 1 : -1;
+    const int j3 = joint->dof;
+    // Pixel rounding of the press and release points: within 0.02 rad of the swept angle.
+    QVERIFY2(std::abs(posed[j3] - before[j3] - sign * sweep) < 0.02, qPrintable(QString::number(posed[j3] - before[j3])));
+    for (int d = 0; d < posed.size(); ++d)
+      if (d != j3) QCOMPARE(posed[d], before[d]);
+    // The viewport draws the posed head.
+    const Eigen::Vector3d headNow = bodyToWorld(model, posed, head, Eigen::Vector3d::Zero());
+    const Eigen::Vector3d tip = bodyToWorld(model, posed, head, Eigen::Vector3d(0.1, 0, 0));
+    bool drawn = false;
+    for (const Solid& s : w.viewport()->renderScene().solids)
+      if (s.body == "head" && !s.ghost) {
+        const glm::vec3 shown = glm::vec3(s.transform * glm::vec4(0, 0, 0, 1));
+        drawn = (Eigen::Vector3d(shown.x, shown.y, shown.z) - headNow).norm() < 0.2;
+      }
+    QVERIFY(drawn && (tip - headNow).norm() > 0.05);
+
+    // K at t = 0 replaces start_pose (one key at t = 0) with the posed values.
+    const size_t terms = doc.scene().terms.size();
+    w.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    QTest::keyClick(QApplication::focusWidget() ? QApplication::focusWidget() : &w, Qt::Key_K);
+    QCOMPARE(doc.scene().terms.size(), terms);
+    QVERIFY(!doc.posed());
+    const TermSpec* key = nullptr;
+    int keysAtStart = 0;
+    for (const TermSpec& t : doc.scene().terms)
+      if (t.kind == TermKind::Keyframe && t.time == 0) key = &t, ++keysAtStart;
+    QCOMPARE(keysAtStart, 1);
+    QCOMPARE(key->id, std::string("start_pose"));
+    QVERIFY2(w.statusText().contains("Replaced key 'start_pose'"), qPrintable(w.statusText()));
+    for (const auto& [dof, v] : key->values) QCOMPARE(v, posed[model.dofIndex(dof)]);
+
+    // The solve starts from that pose: the default guess passes through the keys.
+    std::string error;
+    const auto problem = SpacetimeProblem::build(doc.scene(), &error);
+    QVERIFY2(problem, error.c_str());
+    QVERIFY2((problem->jointState(0, 0.0, 0) - posed).cwiseAbs().maxCoeff() < 1e-3,
+             qPrintable(QString::number((problem->jointState(0, 0.0, 0) - posed).cwiseAbs().maxCoeff())));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(120000));
+    QTRY_VERIFY(doc.motion() && doc.motion()->converged);
+    QVERIFY((doc.posesNow()[0] - posed).cwiseAbs().maxCoeff() < 1e-5);
+
+    // A pose not keyed is gone when the time changes.
+    w.viewport()->frameAll();
+    QTest::mousePress(w.viewport(), Qt::LeftButton, {}, w.viewport()->toPixel(centre).toPoint());
+    QTest::mouseMove(w.viewport(), (w.viewport()->toPixel(centre) + QPointF(0, 40)).toPoint());
+    QTest::mouseRelease(w.viewport(), Qt::LeftButton, {}, (w.viewport()->toPixel(centre) + QPointF(0, 40)).toPoint());
+    QVERIFY(doc.posed());
+    doc.setCurrentTime(0.1);
+    QVERIFY(!doc.posed());
   }
 
   void clickingABodySelectsIt() {

@@ -299,7 +299,7 @@ std::string ConstraintsPanel::addPin() {
   if (!selectedTarget(&c, &body) || doc_->models().size() <= static_cast<size_t>(c)) return {};
   const Model<double>& model = doc_->models()[c];
   const double t = doc_->currentTime();
-  const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), t)[c];
+  const Eigen::VectorXd q = doc_->posesNow()[c];
   TermSpec pin = newTerm("pin", TermKind::Pin, c);
   pin.body = body;
   pin.time = t;
@@ -314,13 +314,50 @@ std::string ConstraintsPanel::keyCurrentPose() {
   int c;
   std::string body;
   if (!selectedTarget(&c, &body) || doc_->models().size() <= static_cast<size_t>(c)) return {};
+  if (doc_->posed()) c = doc_->posed()->character;  // the pose being made is what K keys
   const double t = doc_->currentTime();
-  const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), t)[c];
-  TermSpec key = newTerm("key", TermKind::Keyframe, c);
-  key.time = t;
+  const Eigen::VectorXd q = doc_->posesNow()[c];
+  const std::string character = doc_->scene().characters[c].id;
+  std::vector<std::pair<std::string, double>> values;
   const std::vector<std::string> dofs = doc_->scene().characters[c].dofNames();
-  for (size_t d = 0; d < dofs.size(); ++d) key.values.emplace_back(dofs[d], q[static_cast<Eigen::Index>(d)]);
-  return addTerm(tr("Key the current pose"), key);
+  for (size_t d = 0; d < dofs.size(); ++d) values.emplace_back(dofs[d], q[static_cast<Eigen::Index>(d)]);
+  // A key fixes every dof at t, so another key of the character at t is replaced (two would be
+  // redundant constraints, and the solve ended not converged), and a pin on it at t is implied
+  // or contradicted: it goes, and the status bar says so.
+  auto sameInstant = [&](const TermSpec& term) {
+    return term.enabled && term.character == character && std::abs(term.time - t) < 1e-9;
+  };
+  std::string rekeyed;
+  QStringList pins;
+  for (const TermSpec& term : doc_->scene().terms) {
+    if (!sameInstant(term)) continue;
+    if (term.kind == TermKind::Keyframe && rekeyed.empty()) rekeyed = term.id;
+    if (term.kind == TermKind::Pin) pins << QString("'%1'").arg(QString::fromStdString(term.id));
+  }
+  const std::string id = rekeyed.empty() ? doc_->uniqueTermId("key") : rekeyed;
+  doc_->edit(rekeyed.empty() ? tr("Key the current pose") : tr("Re-key the pose"), [&](Scene& s) {
+    std::erase_if(s.terms, [&](const TermSpec& term) {
+      return sameInstant(term) && (term.kind == TermKind::Pin || (term.kind == TermKind::Keyframe && term.id != id));
+    });
+    if (!rekeyed.empty()) {
+      for (TermSpec& term : s.terms)
+        if (term.id == id) term.values = values;
+      return;
+    }
+    TermSpec key = newTerm("key", TermKind::Keyframe, c);
+    key.id = id;
+    key.time = t;
+    key.values = values;
+    s.terms.push_back(key);
+  });
+  doc_->selectTerm(id);
+  QString message = rekeyed.empty() ? tr("Keyed the pose of '%1' at t = %2 s as '%3'")
+                                    : tr("Replaced key '%3' of '%1' at t = %2 s with the current pose");
+  message = message.arg(QString::fromStdString(character)).arg(t, 0, 'g', 4).arg(QString::fromStdString(id));
+  if (!pins.isEmpty())
+    message += tr("; removed pin %1 there (the key fixes every joint; Ctrl+Z brings it back)").arg(pins.join(", "));
+  emit said(message);
+  return id;
 }
 
 std::string ConstraintsPanel::addRest() {

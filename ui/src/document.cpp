@@ -5,6 +5,7 @@
 
 #include "core/scene_io.h"
 #include "dynamics/build_model.h"
+#include "ui/render_scene.h"
 
 namespace spacetime::ui {
 
@@ -51,6 +52,7 @@ void Document::edit(const QString& text, const std::function<void(Scene&)>& chan
 void Document::applyScene(const Scene& scene) {
   scene_ = scene;
   rebuildModels();
+  clearPosed();
   // Undo and redo bring back the converged motion of the scene they restore, as it was shown.
   const std::string key = problemKey(scene_);
   const auto known = std::find_if(solutions_.begin(), solutions_.end(), [&](const auto& e) { return e.first == key; });
@@ -113,6 +115,7 @@ void Document::reset(const Scene& scene, const QString& filePath) {
   remember(motion_);
   path_ = filePath;
   time_ = scene_.startTime;
+  posed_.reset();
   selCharacter_ = scene_.characters.empty() ? -1 : 0;
   selBody_.clear();
   selTerm_.clear();
@@ -186,7 +189,26 @@ void Document::setCurrentTime(double t) {
   t = std::clamp(t, scene_.startTime, scene_.endTime);
   if (t == time_) return;
   time_ = t;
+  clearPosed();
   emit currentTimeChanged(t);
+}
+
+void Document::setPosed(int character, const Eigen::VectorXd& q) {
+  if (character < 0 || static_cast<size_t>(character) >= models_.size() || q.size() != models_[character].dofCount()) return;
+  posed_ = Posed{character, q};
+  emit poseChanged();
+}
+
+void Document::clearPosed() {
+  if (!posed_) return;
+  posed_.reset();
+  emit poseChanged();
+}
+
+std::vector<Eigen::VectorXd> Document::posesNow() const {
+  std::vector<Eigen::VectorXd> poses = posesAt(scene_, models_, motion_.get(), time_);
+  if (posed_ && static_cast<size_t>(posed_->character) < poses.size()) poses[posed_->character] = posed_->q;
+  return poses;
 }
 
 void Document::selectBody(int character, const std::string& body) {

@@ -60,6 +60,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   builder_ = new BuilderPanel(&doc_);
   connect(builder_, &BuilderPanel::said, this, [this](const QString& m) { progress_->setText(m); });
   constraints_ = new ConstraintsPanel(&doc_);
+  connect(constraints_, &ConstraintsPanel::said, this, [this](const QString& m) { progress_->setText(m); });
   timeline_ = new Timeline(&doc_);
   graphs_ = new GraphPanel(&doc_);
   QDockWidget* builderDock = dock(tr("Builder"), "builderDock", builder_, Qt::LeftDockWidgetArea);
@@ -280,6 +281,17 @@ void MainWindow::createActions() {
   edit->addAction(redo);
   edit->addSeparator();
   QAction* pinTool = action(edit, tr("Add &pin by clicking a body"), QKeySequence(Qt::Key_P), [this] { viewport_->setPinTool(true); });
+  // The pose tool (R, as Blender's rotate): drags on bodies turn their joints; K keys the pose.
+  poseToolAction_ = edit->addAction(tr("Pose: drag a body to tu&rn its joint"));
+  poseToolAction_->setObjectName("poseTool");
+  poseToolAction_->setCheckable(true);
+  poseToolAction_->setShortcut(QKeySequence(Qt::Key_R));
+  poseToolAction_->setToolTip(tr("Drag a body around the ring at its joint to turn the joint; K keys the pose, "
+                                 "changing the time drops it"));
+  connect(poseToolAction_, &QAction::toggled, this, [this](bool on) {
+    viewport_->setPoseTool(on);
+    if (on) progress_->setText(tr("Pose: drag a body to turn its joint, K keys the pose"));
+  });
   action(edit, tr("&Key the current pose"), QKeySequence(Qt::Key_K), [this] { constraints_->keyCurrentPose(); });
   action(edit, tr("&Delete term"), QKeySequence::Delete, [this] { constraints_->removeSelected(); });
 
@@ -338,6 +350,7 @@ void MainWindow::createActions() {
   bar->addAction(redo);
   bar->addSeparator();
   bar->addAction(pinTool);
+  bar->addAction(poseToolAction_);
   pinTool->setCheckable(true);
   connect(viewport_, &Viewport::pinToolUsed, pinTool, [pinTool] { pinTool->setChecked(false); });
 }

@@ -105,8 +105,16 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
   // grey, so it is never taken for the result: mid-solve the lamp showed tilted 50 degrees at
   // t = 0, breaking its own start key, in its final colours.
   const bool preview = motion && !motion->solved;
+  // The poses at t, with the unkeyed pose at the current time.
+  auto posesShown = [&](double t, bool ghost) {
+    std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, t);
+    if (!ghost && o.posedCharacter >= 0 && static_cast<size_t>(o.posedCharacter) < poses.size() &&
+        o.posedQ.size() == poses[o.posedCharacter].size())
+      poses[o.posedCharacter] = o.posedQ;
+    return poses;
+  };
   auto drawCharacters = [&](double t, bool ghost, float alpha) {
-    const std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, t);
+    const std::vector<Eigen::VectorXd> poses = posesShown(t, ghost);
     for (size_t c = 0; c < models.size(); ++c) {
       Data<double> d(models[c]);
       forwardKinematics(models[c], d, poses[c].data());
@@ -228,7 +236,7 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
   }
 
   // Pin handles: the target, and where the pinned point is at the current time.
-  const std::vector<Eigen::VectorXd> poses = posesAt(scene, models, motion, o.time);
+  const std::vector<Eigen::VectorXd> poses = posesShown(o.time, false);
   for (const TermSpec& t : scene.terms) {
     if (t.kind != TermKind::Pin) continue;
     const CharacterSpec* ch = scene.character(t.character);
@@ -244,7 +252,38 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
     rs.handles.push_back(h);
     grow(rs, h.position, firstBound);
   }
+  // The pose gizmo: a ring around the selected body's joint, perpendicular to its axis, a bit
+  // larger than the body's reach from the joint, so a drag around it reads as turning the joint.
+  if (o.poseGizmo && o.selectedCharacter >= 0 && static_cast<size_t>(o.selectedCharacter) < models.size()) {
+    const int c = o.selectedCharacter;
+    const int b = models[c].bodyIndex(o.selectedBody);
+    const BodySpec* spec = scene.characters[c].body(o.selectedBody);
+    if (const std::optional<PoseJoint> j = b >= 0 && spec ? poseJoint(models[c], poses[c], b) : std::nullopt) {
+      const float radius = std::clamp(1.1f * static_cast<float>(geometryTip(spec->geometry).norm()), 0.08f, 0.6f);
+      const Eigen::Vector3d helper = std::abs(j->axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+      const Eigen::Vector3d u = j->axis.cross(helper).normalized(), v = j->axis.cross(u);
+      Polyline ring{{}, glm::vec4(1.0f, 0.8f, 0.15f, 1.0f)};
+      for (int k = 0; k <= 48; ++k) {
+        const double a = 2 * M_PI * k / 48;
+        ring.points.push_back(toGlm(j->pivot + radius * (std::cos(a) * u + std::sin(a) * v)));
+      }
+      rs.lines.push_back(std::move(ring));
+    }
+  }
   return rs;
+}
+
+std::optional<PoseJoint> poseJoint(const Model<double>& model, const Eigen::VectorXd& q, int body) {
+  if (body < 0 || body >= model.bodyCount()) return std::nullopt;
+  const Body<double>& b = model.bodies[body];
+  if (b.joint.type != JointType::Revolute || b.dofIndex < 0) return std::nullopt;
+  Data<double> d(model);
+  forwardKinematics(model, d, q.data());
+  PoseJoint j;
+  j.dof = b.dofIndex;
+  j.pivot = d.X_world[body].r;
+  j.axis = (d.X_world[body].E.transpose() * b.joint.axis).normalized();
+  return j;
 }
 
 Eigen::Vector3d bodyToWorld(const Model<double>& model, const Eigen::VectorXd& q, int body,

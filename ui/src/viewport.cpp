@@ -49,7 +49,7 @@ Viewport::Viewport(Document* doc, QWidget* parent) : QOpenGLWidget(parent), doc_
   setObjectName("viewport");
   setMinimumSize(320, 240);
   setFocusPolicy(Qt::StrongFocus);
-  for (auto signal : {&Document::sceneChanged, &Document::motionChanged, &Document::selectionChanged})
+  for (auto signal : {&Document::sceneChanged, &Document::motionChanged, &Document::selectionChanged, &Document::poseChanged})
     connect(doc_, signal, this, &Viewport::invalidate);
   connect(doc_, &Document::currentTimeChanged, this, &Viewport::invalidate);
   camera_.front();
@@ -76,6 +76,9 @@ const RenderScene& Viewport::renderScene() {
     options_.selectedCharacter = doc_->selectedCharacter();
     options_.selectedBody = doc_->selectedBody();
     options_.selectedTerm = doc_->selectedTerm();
+    options_.poseGizmo = poseTool_;
+    options_.posedCharacter = doc_->posed() ? doc_->posed()->character : -1;
+    options_.posedQ = doc_->posed() ? doc_->posed()->q : Eigen::VectorXd();
     scene_ = buildRenderScene(doc_->scene(), doc_->models(), doc_->motion().get(), options_);
     dirty_ = false;
     if (!framedOnce_ && !scene_.solids.empty()) {
@@ -279,10 +282,51 @@ void Viewport::mousePressEvent(QMouseEvent* e) {
       doc_->selectTerm(hd.term);
       dragPlanePoint_ = hd.position;
       dragPlaneNormal_ = glm::normalize(camera_.eye() - camera_.target);
-    } else {
+    } else if (!(poseTool_ && !pinTool_ && startPose(e->position()))) {
       drag_ = Drag::Click;
     }
   }
+}
+
+bool Viewport::startPose(const QPointF& pos) {
+  glm::vec3 o, dir;
+  camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(height()), &o, &dir);
+  const RenderScene& rs = renderScene();
+  const std::optional<Pick> pick = pickSolid(rs, o, dir);
+  if (!pick) return false;
+  const Solid& s = rs.solids[pick->solid];
+  const Model<double>& model = doc_->models()[s.character];
+  const Eigen::VectorXd q = doc_->posesNow()[s.character];
+  const std::optional<PoseJoint> joint = poseJoint(model, q, model.bodyIndex(s.body));
+  doc_->selectBody(s.character, s.body);
+  if (!joint) return false;
+  drag_ = Drag::Pose;
+  pose_ = {s.character, joint->dof, q, 0.0, screenAngle(*joint, pos)};
+  // A joint whose axis points at the viewer turns counter-clockwise on screen as its angle grows.
+  pose_.sign = glm::dot(glm::vec3(joint->axis.cast<float>().x(), joint->axis.cast<float>().y(), joint->axis.cast<float>().z()), camera_.eye() - camera_.target) >= 0 ? 1.0 : -1.0;
+  return true;
+}
+
+double Viewport::screenAngle(const PoseJoint& joint, const QPointF& pos) const {
+  const QPointF c = toPixel(glm::vec3(static_cast<float>(joint.pivot.x()), static_cast<float>(joint.pivot.y()), static_cast<float>(joint.pivot.z())));
+  return std::atan2(-(pos.y() - c.y()), pos.x() - c.x());  // screen y grows downwards
+}
+
+void Viewport::dragPose(const QPointF& pos) {
+  const Model<double>& model = doc_->models()[pose_.character];
+  const std::optional<PoseJoint> joint = poseJoint(model, pose_.start, model.dofBody[pose_.dof]);
+  if (!joint) return;
+  // The angle swept around the pivot since the press, unwrapped across +-pi step by step.
+  const double now = screenAngle(*joint, pos);
+  double step = now - pose_.lastAngle;
+  step -= 2 * M_PI * std::round(step / (2 * M_PI));
+  pose_.swept += step;
+  pose_.lastAngle = now;
+  Eigen::VectorXd q = pose_.start;
+  q[pose_.dof] += pose_.sign * pose_.swept;
+  const Body<double>& b = model.bodies[model.dofBody[pose_.dof]];
+  if (b.hasPositionLimits) q[pose_.dof] = std::clamp(q[pose_.dof], b.lower, b.upper);
+  doc_->setPosed(pose_.character, q);
 }
 
 void Viewport::mouseMoveEvent(QMouseEvent* e) {
@@ -306,6 +350,7 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
       }, kMergePinDrag + (dragSerial_ & 0xFFFFF));
       break;
     }
+    case Drag::Pose: dragPose(e->position()); break;
     default: break;
   }
 }
@@ -332,7 +377,7 @@ void Viewport::clickAt(const QPointF& pos) {
   if (!pinTool_) return;
   // Pin the clicked point of the body where it is now, at the current time.
   const Model<double>& model = doc_->models()[s.character];
-  const Eigen::VectorXd q = posesAt(doc_->scene(), doc_->models(), doc_->motion().get(), doc_->currentTime())[s.character];
+  const Eigen::VectorXd q = doc_->posesNow()[s.character];
   const Eigen::Vector3d world(pick->point.x, pick->point.y, pick->point.z);
   const Eigen::Vector3d local = worldToBody(model, q, model.bodyIndex(s.body), world);
   const std::string id = doc_->uniqueTermId("pin");

@@ -20,7 +20,10 @@ class ConstraintsPanel : public QWidget {
 
   // The panel's commands. Each returns the new term's id (empty if nothing was added).
   std::string addPin();         // the selected body's origin where it is at the current time
-  std::string keyCurrentPose(); // a keyframe of the selected character's pose now
+  // A keyframe of the pose shown now (an unkeyed pose from the pose tool, else the motion's) of
+  // the posed or selected character; it replaces a key of that character at this instant, and
+  // removes its pins there.
+  std::string keyCurrentPose();
   std::string addRest();
   std::string addContact();     // the selected body's base corners on the ground around now
   std::string addClearance();
@@ -29,6 +32,10 @@ class ConstraintsPanel : public QWidget {
   void setEnabled(const std::string& term, bool enabled);
   QTreeWidget* list() const { return list_; }
   PropertyForm* form() const { return form_; }
+
+ signals:
+  // What a command did beyond the obvious (a key that replaced another, pins it removed).
+  void said(const QString& message);
 
  private:
   void rebuildList();

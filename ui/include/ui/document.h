@@ -15,6 +15,7 @@
 #include <QUndoStack>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "core/scene.h"
 #include "dynamics/model.h"
@@ -77,7 +78,21 @@ class Document : public QObject {
   void attachValidity(const SolvedMotion* motion, std::shared_ptr<const ValidityReport> report);
 
   double currentTime() const { return time_; }
-  void setCurrentTime(double t);
+  void setCurrentTime(double t);  // drops an unkeyed pose
+
+  // An unkeyed pose of one character at the current time (the viewport's rotate gizmo makes
+  // it): shown instead of the motion there, and what K keys, until the time or the scene changes
+  // (as in Blender, a pose not keyed is gone when the frame changes).
+  struct Posed {
+    int character = -1;
+    Eigen::VectorXd q;
+  };
+  const std::optional<Posed>& posed() const { return posed_; }
+  void setPosed(int character, const Eigen::VectorXd& q);
+  void clearPosed();
+  // Each character's pose at the current time: the unkeyed pose, else the motion's (the zero
+  // pose without a motion).
+  std::vector<Eigen::VectorXd> posesNow() const;
 
   // Selection: a body of a character, and/or a term.
   int selectedCharacter() const { return selCharacter_; }
@@ -98,6 +113,7 @@ class Document : public QObject {
   void motionChanged();
   void validityChanged();
   void currentTimeChanged(double t);
+  void poseChanged();
   void selectionChanged();
   void filePathChanged(const QString& path);
 
@@ -116,6 +132,7 @@ class Document : public QObject {
   std::shared_ptr<const SolvedMotion> lastGood_, stopped_;
   void remember(const std::shared_ptr<const SolvedMotion>& motion);
   double time_ = 0;
+  std::optional<Posed> posed_;
   int selCharacter_ = -1;
   std::string selBody_, selTerm_;
 };

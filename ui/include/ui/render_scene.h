@@ -73,6 +73,11 @@ struct RenderOptions {
   int selectedCharacter = -1;
   std::string selectedBody;
   std::string selectedTerm;
+  // An unkeyed pose of one character, shown at `time` instead of the motion's (not in ghosts).
+  int posedCharacter = -1;
+  Eigen::VectorXd posedQ;
+  // The pose tool is on: a ring around the selected body's joint, in the plane it turns in.
+  bool poseGizmo = false;
 };
 
 RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>>& models,
@@ -81,6 +86,15 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
 // The pose of each character at time t: the motion's, or the zero pose without one.
 std::vector<Eigen::VectorXd> posesAt(const Scene& scene, const std::vector<Model<double>>& models,
                                      const SolvedMotion* motion, double t);
+
+// The joint the pose gizmo turns when a body is dragged: the body's own revolute joint (for a
+// root, the last joint of its chain: a planar root's rotation). Its dof, the pivot (the body's
+// origin) and the unit axis in world at pose q; nullopt for a fixed or sliding joint.
+struct PoseJoint {
+  int dof = -1;
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero(), axis = Eigen::Vector3d::UnitZ();
+};
+std::optional<PoseJoint> poseJoint(const Model<double>& model, const Eigen::VectorXd& q, int body);
 
 // The nearest solid (not a ghost) hit by the ray origin + s * direction; the hit in world.
 struct Pick {

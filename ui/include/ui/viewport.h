@@ -4,7 +4,8 @@
 // Mouse (as Blender): middle drag orbits, Shift+middle pans, Ctrl+middle or the wheel zooms;
 // Alt+left orbits too, for laptops. Left click selects a body; left drag on a pin handle moves
 // the pin's target in the plane facing the camera (one merged undo command per drag). With the
-// pin tool on, a left click on a body adds a pin at the clicked point at the current time.
+// pin tool on, a left click on a body adds a pin at the clicked point at the current time; with
+// the pose tool on, a left drag on a body turns its joint (an unkeyed pose, keyed with K).
 #pragma once
 
 #include <QOpenGLBuffer>
@@ -38,6 +39,14 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   void frameAll();
   void setPinTool(bool on) { pinTool_ = on; }
   bool pinTool() const { return pinTool_; }
+  // The pose tool: a left drag on a body turns its joint around the ring drawn at the joint (the
+  // angle the mouse sweeps around the joint on screen, within the joint's limits), leaving an
+  // unkeyed pose that K keys.
+  void setPoseTool(bool on) {
+    poseTool_ = on;
+    invalidate();
+  }
+  bool poseTool() const { return poseTool_; }
   // Draws one frame into the current framebuffer and waits for the GPU (for the benchmark).
   double renderFrameAndFinish();
   double lastFrameMilliseconds() const { return lastFrameMs_; }
@@ -69,6 +78,9 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   void drawSolid(const Solid& s);  // with the solid shader bound
   void drawLines(const std::vector<float>& vertices, GLenum mode, const glm::mat4& viewProjection);
   void clickAt(const QPointF& pos);
+  bool startPose(const QPointF& pos);  // false: no body with a turning joint there
+  void dragPose(const QPointF& pos);
+  double screenAngle(const PoseJoint& joint, const QPointF& pos) const;
   int handleAt(const QPointF& pos);
 
   Document* doc_;
@@ -77,6 +89,7 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   RenderScene scene_;
   bool dirty_ = true;
   bool pinTool_ = false;
+  bool poseTool_ = false;
   bool framedOnce_ = false;
 
   std::unique_ptr<QOpenGLShaderProgram> solidShader_, lineShader_;
@@ -86,7 +99,12 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   double lastFrameMs_ = 0;
 
   // Mouse state.
-  enum class Drag { None, Orbit, Pan, Zoom, Handle, Click } drag_ = Drag::None;
+  enum class Drag { None, Orbit, Pan, Zoom, Handle, Click, Pose } drag_ = Drag::None;
+  struct PoseDrag {
+    int character = -1, dof = -1;
+    Eigen::VectorXd start;  // the pose when the drag began
+    double swept = 0, lastAngle = 0, sign = 1;
+  } pose_;
   QPointF last_, pressPos_;
   std::string dragTerm_;
   int dragSerial_ = 0;
