@@ -253,7 +253,14 @@ void BuilderPanel::bodyForm(int c, const std::string& id) {
                    });
   form_->addVector(tr("Size"), [body](const Scene& s) { return body(s).geometry.size; },
                    [edit](Scene& s, const Eigen::Vector3d& v) {
-                     if (v.minCoeff() > 0) edit(s, [v](BodySpec& b) { b.geometry.size = v; });
+                     // Only the components the shape uses must be positive: a capsule's size is
+                     // (radius, length, 0), and requiring all three refused every edit of it.
+                     edit(s, [v](BodySpec& b) {
+                       const int used = b.geometry.kind == GeometryKind::Box      ? 3
+                                        : b.geometry.kind == GeometryKind::Sphere ? 1
+                                                                                  : 2;
+                       if (v.head(used).minCoeff() > 0) b.geometry.size = v;
+                     });
                    }, 0.001, 10, 0.01, 3);
   form_->addChoice(tr("Shape axis"), {"x", "y", "z"}, [body](const Scene& s) { return body(s).geometry.axis; },
                    [edit](Scene& s, int v) { edit(s, [v](BodySpec& b) { b.geometry.axis = v; }); });
