@@ -24,6 +24,7 @@
 #include <QTemporaryDir>
 #include <QTimer>
 #include <QToolButton>
+#include <QProgressBar>
 #include <QtTest>
 #include <cstring>
 #include <map>
@@ -853,6 +854,27 @@ class EditorTest : public QObject {
     const double step = axis->tickInterval(), mantissa = step / std::pow(10.0, std::floor(std::log10(step)));
     QVERIFY2(std::abs(mantissa - 1) < 1e-9 || std::abs(mantissa - 2) < 1e-9 || std::abs(mantissa - 5) < 1e-9,
              qPrintable(QString("tick interval %1").arg(step)));
+    // One y axis per unit: the centre of mass's height on metres beside the default joint
+    // torques on newton-metres, each axis spanning its own series only (on one shared axis the
+    // 0.1-0.5 m height was a flat line under torques of 20 N m).
+    QCOMPARE(chart->axes(Qt::Vertical).size(), 2);
+    int torques = 0;
+    for (QAbstractSeries* line : chart->series()) {
+      QValueAxis* y = nullptr;
+      for (QAbstractAxis* a : line->attachedAxes())
+        if (a->orientation() == Qt::Vertical) y = qobject_cast<QValueAxis*>(a);
+      QVERIFY(y);
+      if (line->name() == "com.y") {
+        QCOMPARE(y->titleText(), QString("m"));
+        QVERIFY2(y->max() < 1.0, qPrintable(QString::number(y->max())));
+      } else {
+        QVERIFY2(line->name().startsWith("tau."), qPrintable(line->name()));
+        QCOMPARE(y->titleText(), QString("N·m"));
+        QVERIFY(y->max() > 5);
+        ++torques;
+      }
+    }
+    QCOMPARE(torques, 3);
   }
 
   // The validity panel shows the engine's checklist for the solved motion: before a solve it
@@ -1140,6 +1162,63 @@ class EditorTest : public QObject {
     QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
     QVERIFY(!doc.motion()->validity->flights.empty());
     QVERIFY(doc.motion()->validity->flights[0].maxRootLift >= 0.05);
+  }
+
+  // While a solve runs, a progress bar in the status bar estimates how far it has come: the
+  // largest violation on a log scale from the first iterate's to the tolerance. It rises during
+  // the jump's solve and goes when the solve ends.
+  void solveProgressBarRisesWhileSolving() {
+    SolveProgress estimate(1e-7);  // 0 at the first violation, 1/2 halfway in decades, 1 at the tolerance
+    QCOMPARE(estimate.update(1e-1), 0.0);
+    QVERIFY(std::abs(estimate.update(1e-4) - 0.5) < 1e-12);
+    QCOMPARE(estimate.update(1e-9), 1.0);
+
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    auto* bar = w.findChild<QProgressBar*>("solveProgress");
+    QVERIFY(bar && !bar->isVisible());
+    std::vector<int> seen;
+    bool hiddenDuringSolve = false;
+    connect(w.solverJob(), &SolverJob::iterate, &w, [&] {
+      seen.push_back(bar->value());
+      hiddenDuringSolve |= !bar->isVisible();
+    });
+    w.solve();
+    QVERIFY(bar->isVisible());
+    QTRY_VERIFY_WITH_TIMEOUT(!w.solverJob()->isRunning() && !bar->isVisible(), 120000);
+    QVERIFY(w.document()->motion() && w.document()->motion()->converged);
+    QVERIFY(seen.size() >= 3);
+    QVERIFY(!hiddenDuringSolve);
+    QVERIFY2(*std::max_element(seen.begin(), seen.end()) >= 500, qPrintable(QString::number(seen.back())));
+  }
+
+  // The term list highlights the document's selection and nothing else: a term, the joint
+  // limit row of a selected body, or no row (a body without limits); Delete then removes
+  // exactly what is highlighted. (Seen: the list highlighted one term while the form showed,
+  // and Delete removed, another.)
+  void termListHighlightsTheSelection() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    Document& doc = *w.document();
+    QTreeWidget* list = w.constraints()->list();
+    doc.selectTerm("landing");
+    QVERIFY(list->currentItem());
+    QCOMPARE(list->currentItem()->text(0), QString("landing"));
+    doc.selectTerm({});
+    doc.selectBody(0, "head");  // its joint j3 has limits: their row
+    QVERIFY(list->currentItem());
+    QCOMPARE(list->currentItem()->text(0), QString("j3"));
+    doc.selectBody(0, "base");  // the root: no limit row
+    QVERIFY(!list->currentItem());
+    QVERIFY(list->selectedItems().isEmpty());
+    const size_t terms = doc.scene().terms.size();
+    w.constraints()->removeSelected();
+    QCOMPARE(doc.scene().terms.size(), terms);
+    doc.selectTerm("takeoff");
+    w.constraints()->removeSelected();
+    QCOMPARE(doc.scene().terms.size(), terms - 1);
+    QVERIFY(std::none_of(doc.scene().terms.begin(), doc.scene().terms.end(), [](const TermSpec& t) { return t.id == "takeoff"; }));
+    QVERIFY(!list->currentItem());
   }
 
   // File > Open Example lists every scene in resources/scenes by its name, and each opens

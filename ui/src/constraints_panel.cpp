@@ -99,6 +99,7 @@ ConstraintsPanel::ConstraintsPanel(Document* doc, QWidget* parent) : QWidget(par
 void ConstraintsPanel::rebuildList() {
   syncing_ = true;
   list_->clear();
+  QTreeWidgetItem* current = nullptr;  // the row of the document's selection, if it has one
   const Scene& s = doc_->scene();
   for (const TermSpec& t : s.terms) {
     auto* item = new QTreeWidgetItem(list_, {QString::fromStdString(t.id), QString::fromStdString(toString(t.kind)), when(t)});
@@ -106,7 +107,7 @@ void ConstraintsPanel::rebuildList() {
     item->setCheckState(0, t.enabled ? Qt::Checked : Qt::Unchecked);
     item->setData(0, Qt::UserRole, QString::fromStdString(t.id));
     item->setData(0, Qt::UserRole + 1, QString::fromStdString(toString(t.kind)));
-    if (t.id == doc_->selectedTerm()) list_->setCurrentItem(item);
+    if (t.id == doc_->selectedTerm()) current = item;
   }
   // Joint position, torque and speed limits live on the joints (edited in the builder); listed here too.
   for (size_t c = 0; c < s.characters.size(); ++c)
@@ -120,7 +121,13 @@ void ConstraintsPanel::rebuildList() {
       item->setData(0, Qt::UserRole, QString::fromStdString(b.id));
       item->setData(0, Qt::UserRole + 1, QString("limit"));
       item->setData(0, Qt::UserRole + 2, static_cast<int>(c));
+      if (doc_->selectedTerm().empty() && static_cast<int>(c) == doc_->selectedCharacter() && b.id == doc_->selectedBody())
+        current = item;
     }
+  // The highlighted row is always the document's selection, or none: left to itself the list
+  // highlighted its first row while the form showed, and Delete removed, the selected term.
+  list_->setCurrentItem(current);
+  if (!current) list_->clearSelection();
   syncing_ = false;
 }
 

@@ -80,6 +80,7 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
       }
       if (found) {
         out->name = QString("%1 force %2 (N)").arg(parts.value(1), parts.value(2));
+        out->unit = "N";
         return true;
       }
     }
@@ -105,6 +106,10 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
     const Eigen::MatrixXd& m = kind == "q" ? a.q : kind == "qd" ? a.qd : kind == "qdd" ? a.qdd : a.tau;
     for (Eigen::Index f = 0; f < frames; ++f) out->values.push_back(m(f, d));
     out->name = kind + "." + parts.value(2);
+    // A sliding joint's quantities are lengths and forces; turning ones' angles and torques.
+    const bool slides = model.bodies[model.dofBody[d]].joint.type == JointType::Prismatic;
+    const QString position = slides ? "m" : "rad";
+    out->unit = kind == "q" ? position : kind == "qd" ? position + "/s" : kind == "qdd" ? position + "/s²" : slides ? "N" : "N·m";
     return true;
   }
   if (kind == "pos" || kind == "vel" || kind == "com") {
@@ -125,6 +130,7 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
       out->values.push_back(v[axis]);
     }
     out->name = kind == "com" ? QString("com.%1").arg(kAxes[axis]) : QString("%1(%2).%3").arg(kind, parts.value(2)).arg(kAxes[axis]);
+    out->unit = kind == "vel" ? "m/s" : "m";
     return true;
   }
   if (kind == "residual") {
@@ -136,6 +142,7 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
       out->values.push_back(worst);
     }
     out->name = QObject::tr("physics residual (× weight)");
+    out->unit = QObject::tr("× weight");
     return true;
   }
   if (kind == "formula") {
@@ -147,6 +154,7 @@ bool computeSeries(const Document& doc, const QString& key, PlotSeries* out, QSt
     }
     out->values = fs.values;
     out->name = text;
+    out->unit = QObject::tr("formula");
     return true;
   }
   *error = QObject::tr("unknown quantity %1").arg(key);
@@ -342,24 +350,39 @@ void GraphPanel::replot() {
     if (computeSeries(*doc_, key, &s, &error)) plotted.push_back(std::move(s));
   }
   QChart* chart = view_->chart();
+  // One y axis per unit, in the order the units first appear, alternately left and right: metres
+  // and newton-metres on one unitless axis hid the smaller of them.
+  std::vector<QString> units;
+  for (const PlotSeries& s : plotted)
+    if (std::find(units.begin(), units.end(), s.unit) == units.end()) units.push_back(s.unit);
+  auto unitIndex = [&](const QString& unit) {
+    return static_cast<qsizetype>(std::find(units.begin(), units.end(), unit) - units.begin());
+  };
   // The same series as before (every solver iterate, every edit that keeps the plotted set):
   // replace their points and ranges in place. Rebuilding series and axes costs QtCharts a
   // relayout and new axis labels, several milliseconds per iterate on the interface thread.
   QList<QAbstractSeries*> lines = chart->series();
-  bool sameSeries = lines.size() == static_cast<qsizetype>(plotted.size()) && chart->axes().size() == 2;
+  QList<QAbstractAxis*> yAxes = chart->axes(Qt::Vertical);
+  bool sameSeries = lines.size() == static_cast<qsizetype>(plotted.size()) &&
+                    chart->axes(Qt::Horizontal).size() == 1 && yAxes.size() == static_cast<qsizetype>(units.size());
   for (size_t i = 0; sameSeries && i < plotted.size(); ++i) sameSeries = lines[i]->name() == plotted[i].name;
+  for (size_t u = 0; sameSeries && u < units.size(); ++u) sameSeries = yAxes[u]->titleText() == units[u];
   auto* x = sameSeries ? qobject_cast<QValueAxis*>(chart->axes(Qt::Horizontal).value(0)) : nullptr;
-  auto* y = sameSeries ? qobject_cast<QValueAxis*>(chart->axes(Qt::Vertical).value(0)) : nullptr;
-  if (!x || !y) {
+  if (!x) {
     chart->removeAllSeries();
     for (QAbstractAxis* axis : chart->axes()) chart->removeAxis(axis);
     x = new QValueAxis;
     x->setTitleText(tr("time (s)"));
     x->setLabelFormat("%.2f");
-    y = new QValueAxis;
-    y->setLabelFormat("%.3g");
     chart->addAxis(x, Qt::AlignBottom);
-    chart->addAxis(y, Qt::AlignLeft);
+    yAxes.clear();
+    for (size_t u = 0; u < units.size(); ++u) {
+      auto* y = new QValueAxis;
+      y->setLabelFormat("%.3g");
+      y->setTitleText(units[u]);
+      chart->addAxis(y, u % 2 == 0 ? Qt::AlignLeft : Qt::AlignRight);
+      yAxes.push_back(y);
+    }
     lines.clear();
     std::vector<QColor> taken;
     for (const PlotSeries& s : plotted) {
@@ -369,19 +392,20 @@ void GraphPanel::replot() {
       line->setColor(taken.back());
       chart->addSeries(line);
       line->attachAxis(x);
-      line->attachAxis(y);
+      line->attachAxis(yAxes[unitIndex(s.unit)]);
       lines.push_back(line);
     }
   }
-  double lo = 1e300, hi = -1e300;
+  std::vector<double> lo(units.size(), 1e300), hi(units.size(), -1e300);
   for (size_t k = 0; k < plotted.size(); ++k) {
     const PlotSeries& s = plotted[k];
+    const qsizetype u = unitIndex(s.unit);
     QList<QPointF> points;
     points.reserve(static_cast<qsizetype>(s.times.size()));
     for (size_t i = 0; i < s.times.size(); ++i) {
       points.append(QPointF(s.times[i], s.values[i]));
-      lo = std::min(lo, s.values[i]);
-      hi = std::max(hi, s.values[i]);
+      lo[u] = std::min(lo[u], s.values[i]);
+      hi[u] = std::max(hi[u], s.values[i]);
     }
     static_cast<QLineSeries*>(lines[static_cast<qsizetype>(k)])->replace(points);
   }
@@ -390,12 +414,15 @@ void GraphPanel::replot() {
   // Range and interval change with fixed ticks in between: Qt lays the axis out after each
   // setter, and a flat series' leftover interval (~5e-10) over the next plot's range asked for
   // ~1e9 ticks - the editor froze with its memory growing ~300 MB/s.
-  const ValueAxisRange range = valueAxisRange(lo, hi);
-  y->setTickType(QValueAxis::TicksFixed);
-  y->setRange(range.min, range.max);
-  y->setTickAnchor(0);
-  y->setTickInterval(range.tickInterval);
-  y->setTickType(QValueAxis::TicksDynamic);
+  for (size_t u = 0; u < units.size(); ++u) {
+    auto* y = static_cast<QValueAxis*>(yAxes[static_cast<qsizetype>(u)]);
+    const ValueAxisRange range = valueAxisRange(lo[u], hi[u]);
+    y->setTickType(QValueAxis::TicksFixed);
+    y->setRange(range.min, range.max);
+    y->setTickAnchor(0);
+    y->setTickInterval(range.tickInterval);
+    y->setTickType(QValueAxis::TicksDynamic);
+  }
   view_->cursorTime = doc_->currentTime();
   view_->viewport()->update();
 }

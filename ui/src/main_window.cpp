@@ -81,6 +81,15 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
 
   progress_ = new QLabel(tr("Ready"));
   statusBar()->addPermanentWidget(progress_, 1);
+  // While a solve runs: how far the constraint violation has fallen towards the tolerance.
+  solveProgress_ = new QProgressBar;
+  solveProgress_->setObjectName("solveProgress");
+  solveProgress_->setRange(0, 1000);
+  solveProgress_->setMinimumWidth(240);
+  solveProgress_->setToolTip(tr("The largest constraint violation on a log scale, from the first iterate's to the "
+                                "solver tolerance: an estimate of how far the solve has come"));
+  solveProgress_->hide();
+  statusBar()->addPermanentWidget(solveProgress_);
 
   createActions();
   for (QDockWidget* d : {builderDock, sceneDock, constraintsDock, validityDock, timelineDock, graphDock})
@@ -90,6 +99,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     doc_.setMotion(m);
     progress_->setText(tr("Solving… iteration %1 · objective %2 · violation %3")
                            .arg(m->iterations).arg(m->objective, 0, 'g', 6).arg(m->maxViolation, 0, 'g', 3));
+    const double done = progressEstimate_.update(m->maxViolation);
+    solveProgress_->setValue(static_cast<int>(std::lround(1000 * done)));
+    solveProgress_->setFormat(tr("%1 % of the way to the tolerance").arg(std::lround(100 * done)));
   });
   connect(&job_, &SolverJob::finished, this, [this](std::shared_ptr<const SolvedMotion> m, const SolverSummary& s) {
     const bool shown = doc_.acceptResult(m);
@@ -102,6 +114,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     showStoppedAction_->setEnabled(doc_.stoppedMotion() != nullptr);
     solveAction_->setEnabled(true);
     stopAction_->setEnabled(false);
+    solveProgress_->hide();
   });
   connect(&job_, &SolverJob::validated, this,
           [this](std::shared_ptr<const SolvedMotion> m, std::shared_ptr<const ValidityReport> report) {
@@ -111,6 +124,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     progress_->setText(tr("Cannot solve: %1").arg(why));
     solveAction_->setEnabled(true);
     stopAction_->setEnabled(false);
+    solveProgress_->hide();
   });
   resolveTimer_.setSingleShot(true);
   resolveTimer_.setInterval(0);
@@ -397,6 +411,10 @@ void MainWindow::solve() {
   solveAction_->setEnabled(false);
   stopAction_->setEnabled(true);
   progress_->setText(tr("Solving…"));
+  progressEstimate_ = SolveProgress(doc_.scene().solver.tolerance);
+  solveProgress_->setValue(0);
+  solveProgress_->setFormat(tr("starting"));
+  solveProgress_->show();
 }
 
 void MainWindow::stopSolve() { job_.cancel(); }

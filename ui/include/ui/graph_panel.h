@@ -19,6 +19,7 @@ namespace spacetime::ui {
 
 struct PlotSeries {
   QString name;
+  QString unit;  // the y axis it is plotted on: one axis per unit ("rad", "N·m", "m/s", ...)
   std::vector<double> times, values;
 };
 

@@ -10,6 +10,7 @@
 #include <QLabel>
 #include <QLockFile>
 #include <QMainWindow>
+#include <QProgressBar>
 #include <QTimer>
 #include <functional>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "ui/graph_panel.h"
 #include "ui/scene_settings_panel.h"
 #include "ui/validity_panel.h"
+#include "ui/solve_progress.h"
 #include "ui/solver_job.h"
 #include "ui/timeline.h"
 #include "ui/viewport.h"
@@ -99,6 +101,8 @@ class MainWindow : public QMainWindow {
   GraphPanel* graphs_;
   ValidityPanel* validity_;
   QLabel* progress_;
+  QProgressBar* solveProgress_ = nullptr;
+  SolveProgress progressEstimate_{1e-7};
   QMenu* recentMenu_ = nullptr;
   QAction* solveAction_ = nullptr;
   QAction* stopAction_ = nullptr;
