@@ -35,6 +35,7 @@
 
 #include "core/scene_io.h"
 #include "core/shape_mesh.h"
+#include "dynamics/algorithms.h"
 #include "solver/interior_point.h"
 #include "solver/spacetime_problem.h"
 #include "ui/main_window.h"
@@ -290,6 +291,33 @@ class EditorTest : public QObject {
     w.document()->undoStack()->undo();
     QCOMPARE(w.document()->scene().frameRate, 24.0);
     QCOMPARE(fps->value(), 24);
+  }
+
+  // PNG frames at the scene's frame rate, at a resolution other than the viewport's (rendered
+  // offscreen), each showing the scene: the lamp's colours, not a blank or black frame.
+  void pngFramesAtAChosenResolution() {
+    QTemporaryDir dir;
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1000, 700)));
+    w.viewport()->frameAll();
+    QString error;
+    QVERIFY2(w.exportImageSequence(dir.filePath("png"), &error, QSize(640, 360)), qPrintable(error));
+    const QStringList frames = QDir(dir.filePath("png")).entryList({"frame_*.png"}, QDir::Files, QDir::Name);
+    QCOMPARE(frames.size(), 29);  // 1.2 s at 24 fps, both ends
+    for (const QString& name : {frames.front(), frames.back()}) {
+      const QImage image(dir.filePath("png/" + name));
+      QCOMPARE(image.size(), QSize(640, 360));
+      std::set<QRgb> colours;
+      int yellowish = 0;  // the lamp's head (0.95, 0.85, 0.4), lit
+      for (int y = 0; y < image.height(); y += 2)
+        for (int x = 0; x < image.width(); x += 2) {
+          const QColor c = image.pixelColor(x, y);
+          colours.insert(c.rgb());
+          yellowish += c.red() > 120 && c.green() > 100 && c.blue() < 0.7 * c.green();
+        }
+      QVERIFY2(colours.size() > 50, qPrintable(QString::number(colours.size())));
+      QVERIFY2(yellowish > 100, qPrintable(QString::number(yellowish)));
+    }
   }
 
   // The dock layout survives a restart: closing saves it to QSettings, the next window restores
@@ -1340,6 +1368,63 @@ class EditorTest : public QObject {
     QVERIFY(doc.posed());
     doc.setCurrentTime(0.1);
     QVERIFY(!doc.posed());
+  }
+
+  // Home frames all even when the builder's tree has the focus (the tree took the key to go to
+  // its first row).
+  void homeInAFocusedTreeFramesAll() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    w.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&w));
+    w.viewport()->frameAll();
+    const OrbitCamera framed = w.viewport()->camera();
+    w.viewport()->camera().zoom(3.0f);
+    w.viewport()->camera().pan(0.4f, 0.2f);
+    QTreeWidget* tree = w.builder()->tree();
+    tree->setFocus();
+    QTRY_VERIFY(tree->hasFocus());
+    QTest::keyClick(tree, Qt::Key_Home);
+    QVERIFY(std::abs(w.viewport()->camera().distance - framed.distance) < 1e-5f);
+    QVERIFY(glm::length(w.viewport()->camera().target - framed.target) < 1e-5f);
+  }
+
+  // View > Follow the character (F): the camera keeps its offset from the character's centre
+  // of mass as the time changes, so the jump's landing 0.6 m ahead stays in view; off, the
+  // camera stays put.
+  void cameraFollowsTheCharacter() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(120000));
+    QTRY_VERIFY(w.document()->motion() && w.document()->motion()->converged);
+    Document& doc = *w.document();
+    doc.setCurrentTime(0.0);
+    w.viewport()->renderScene();
+    auto com = [&] {
+      const Model<double>& model = doc.models()[0];
+      Data<double> d(model);
+      forwardKinematics(model, d, doc.posesNow()[0].data());
+      return centerOfMass(model, d);
+    };
+    const Eigen::Vector3d com0 = com();
+    const glm::vec3 target0 = w.viewport()->camera().target;
+    QAction* follow = w.findChild<QAction*>("followCharacter");
+    QVERIFY(follow);
+    follow->trigger();
+    QVERIFY(w.viewport()->follow());
+    doc.setCurrentTime(1.2);
+    w.viewport()->renderScene();
+    const Eigen::Vector3d com1 = com();
+    const glm::vec3 moved = w.viewport()->camera().target - target0;
+    QVERIFY(com1.x() - com0.x() > 0.5);
+    QVERIFY2(std::abs(moved.x - (com1.x() - com0.x())) < 1e-4, qPrintable(QString::number(moved.x)));
+    QVERIFY(std::abs(moved.y - (com1.y() - com0.y())) < 1e-4);
+    follow->trigger();
+    const glm::vec3 target1 = w.viewport()->camera().target;
+    doc.setCurrentTime(0.0);
+    w.viewport()->renderScene();
+    QVERIFY(glm::length(w.viewport()->camera().target - target1) < 1e-6f);
   }
 
   void clickingABodySelectsIt() {

@@ -7,6 +7,7 @@
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QInputDialog>
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QAbstractSpinBox>
@@ -286,7 +287,25 @@ void MainWindow::createActions() {
   action(exportMenu, tr("Animated scene (glTF)…"), QKeySequence(), exportTo(tr("Export glTF"), "motion.glb", "glTF binary (*.glb)", &MainWindow::exportGltf));
   action(exportMenu, tr("URDF…"), QKeySequence(), exportDir(tr("Export URDF"), &MainWindow::exportUrdf));
   action(exportMenu, tr("Motion (BVH)…"), QKeySequence(), exportDir(tr("Export BVH"), &MainWindow::exportBvh));
-  action(exportMenu, tr("PNG image sequence…"), QKeySequence(), exportDir(tr("Export images"), &MainWindow::exportImageSequence));
+  // PNG frames at a resolution picked first: the viewport's, or a video size.
+  action(exportMenu, tr("PNG image sequence…"), QKeySequence(), [this] {
+    const QSize viewportSize = viewport_->size() * viewport_->devicePixelRatio();
+    const QStringList sizes = {tr("Viewport (%1×%2)").arg(viewportSize.width()).arg(viewportSize.height()),
+                               "1280×720", "1920×1080", "3840×2160"};
+    bool ok = false;
+    const QString picked = QInputDialog::getItem(this, tr("Export images"), tr("Resolution"), sizes, 2, false, &ok);
+    if (!ok) return;
+    const int index = static_cast<int>(sizes.indexOf(picked));
+    const QSize size = index <= 0 ? QSize() : QSize(picked.section(QChar(0xD7), 0, 0).toInt(), picked.section(QChar(0xD7), 1, 1).toInt());
+    const QString dir = QFileDialog::getExistingDirectory(this, tr("Export images"));
+    if (dir.isEmpty()) return;
+    QString error;
+    if (!exportImageSequence(dir, &error, size)) QMessageBox::warning(this, tr("Export images"), error);
+    else progress_->setText(tr("Exported %1 × %2 images into %3")
+                                .arg(size.isValid() ? size.width() : viewportSize.width())
+                                .arg(size.isValid() ? size.height() : viewportSize.height())
+                                .arg(QDir::toNativeSeparators(dir)));
+  });
   file->addSeparator();
   action(file, tr("&Quit"), QKeySequence::Quit, [this] { close(); });
 
@@ -335,6 +354,12 @@ void MainWindow::createActions() {
   toggle(tr("Motion trail"), true, [this](bool v) { viewport_->options().trail = v; });
   toggle(tr("Centre-of-mass path"), true, [this](bool v) { viewport_->options().centerOfMass = v; });
   toggle(tr("Contact forces"), true, [this](bool v) { viewport_->options().forces = v; });
+  QAction* follow = view->addAction(tr("Follow the character"));
+  follow->setObjectName("followCharacter");
+  follow->setCheckable(true);
+  follow->setShortcut(QKeySequence(Qt::Key_F));
+  follow->setToolTip(tr("The camera moves with the selected character's centre of mass as the time changes"));
+  connect(follow, &QAction::toggled, this, [this](bool on) { viewport_->setFollow(on); });
   view->addSeparator();
 
   QMenu* play = menuBar()->addMenu(tr("&Playback"));
@@ -506,7 +531,7 @@ bool MainWindow::writeCharacterFiles(
   return true;
 }
 
-bool MainWindow::exportImageSequence(const QString& directory, QString* error) {
+bool MainWindow::exportImageSequence(const QString& directory, QString* error, const QSize& size) {
   if (!QDir().mkpath(directory)) { *error = tr("%1: cannot create the folder").arg(directory); return false; }
   const Scene& s = doc_.scene();
   const double before = doc_.currentTime();
@@ -514,7 +539,7 @@ bool MainWindow::exportImageSequence(const QString& directory, QString* error) {
   const int frames = static_cast<int>(std::floor((s.endTime - s.startTime) * fps + 1e-9)) + 1;
   for (int f = 0; f < frames; ++f) {
     doc_.setCurrentTime(s.startTime + static_cast<double>(f) / fps);
-    const QImage image = viewport_->grabFramebuffer();
+    const QImage image = size.isValid() ? viewport_->renderImage(size) : viewport_->grabFramebuffer();
     const QString path = QString("%1/frame_%2.png").arg(directory).arg(f, 4, 10, QChar('0'));
     if (!image.save(path)) {
       *error = tr("%1: cannot write the image").arg(path);

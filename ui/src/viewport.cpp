@@ -1,5 +1,7 @@
 #include "ui/viewport.h"
 
+#include <QOpenGLFramebufferObject>
+
 #include <QElapsedTimer>
 #include <QMouseEvent>
 #include <QSurfaceFormat>
@@ -9,6 +11,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "core/shape_mesh.h"
+#include "dynamics/algorithms.h"
 
 namespace spacetime::ui {
 
@@ -85,13 +88,39 @@ const RenderScene& Viewport::renderScene() {
       framedOnce_ = true;
       camera_.frame(scene_.boundsMin, scene_.boundsMax);
     }
+    if (follow_) {
+      if (const std::optional<glm::vec3> com = followedCentre()) camera_.target = *com + followOffset_;
+    }
   }
   return scene_;
+}
+
+std::optional<glm::vec3> Viewport::followedCentre() const {
+  const int c = std::max(0, doc_->selectedCharacter());
+  if (static_cast<size_t>(c) >= doc_->models().size() || doc_->models()[c].totalMass() <= 0) return std::nullopt;
+  const Model<double>& model = doc_->models()[c];
+  Data<double> d(model);
+  forwardKinematics(model, d, doc_->posesNow()[c].data());
+  const Eigen::Vector3d com = centerOfMass(model, d);
+  return glm::vec3(static_cast<float>(com.x()), static_cast<float>(com.y()), static_cast<float>(com.z()));
+}
+
+void Viewport::setFollow(bool on) {
+  follow_ = false;
+  if (on) {
+    // Keep the view where it is now relative to the character: the camera moves with it.
+    const std::optional<glm::vec3> com = followedCentre();
+    if (!com) return;
+    followOffset_ = camera_.target - *com;
+    follow_ = true;
+  }
+  invalidate();
 }
 
 void Viewport::frameAll() {
   const RenderScene& rs = renderScene();
   camera_.frame(rs.boundsMin, rs.boundsMax);
+  if (follow_) setFollow(true);  // follow from the framed view
   update();
 }
 
@@ -164,7 +193,8 @@ void Viewport::paintGL() {
   QElapsedTimer timer;
   timer.start();
   const RenderScene& rs = renderScene();
-  const float w = static_cast<float>(width()), h = static_cast<float>(height());
+  const QSize target = renderSize_.isValid() ? renderSize_ : size();
+  const float w = static_cast<float>(target.width()), h = static_cast<float>(target.height());
   const glm::mat4 vp = camera_.projection(w / std::max(1.0f, h)) * camera_.view();
 
   glClearColor(0.16f, 0.17f, 0.19f, 1.0f);
@@ -247,6 +277,25 @@ double Viewport::renderFrameAndFinish() {
   paintGL();
   glFinish();
   return timer.nsecsElapsed() * 1e-6;
+}
+
+QImage Viewport::renderImage(const QSize& size) {
+  makeCurrent();
+  // A multisampled offscreen framebuffer of the requested size (the window's own has none),
+  // resolved into the image by toImage().
+  QOpenGLFramebufferObjectFormat format;
+  format.setAttachment(QOpenGLFramebufferObject::CombinedDepthStencil);
+  format.setSamples(4);
+  QOpenGLFramebufferObject fbo(size, format);
+  fbo.bind();
+  glViewport(0, 0, size.width(), size.height());
+  renderSize_ = size;
+  paintGL();
+  renderSize_ = QSize();
+  QImage image = fbo.toImage();
+  fbo.release();
+  doneCurrent();
+  return image;
 }
 
 QPointF Viewport::toPixel(const glm::vec3& p) const {

@@ -60,7 +60,8 @@ class MainWindow : public QMainWindow {
   bool exportUrdf(const QString& directory, QString* error);
   bool exportBvh(const QString& directory, QString* error);  // <character>.bvh at the display rate
   bool exportGltf(const QString& path, QString* error);       // one .glb: every character, animated
-  bool exportImageSequence(const QString& directory, QString* error);  // frame_0000.png ...
+  // frame_0000.png ... at the scene's frame rate, `size` pixels each (invalid: the viewport's).
+  bool exportImageSequence(const QString& directory, QString* error, const QSize& size = QSize());
 
   // Autosave: the file the current document autosaves to, writing it, and the recovery check:
   // the autosaves of windows that are no longer running (their lock is free), newest first.

@@ -15,6 +15,7 @@
 #include <QOpenGLWidget>
 #include <array>
 #include <memory>
+#include <optional>
 
 #include "ui/camera.h"
 #include "ui/document.h"
@@ -47,8 +48,15 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
     invalidate();
   }
   bool poseTool() const { return poseTool_; }
+  // Follow the character: the camera's target keeps its offset from the selected (or first)
+  // character's centre of mass as the time changes, so a long jump stays in view.
+  void setFollow(bool on);
+  bool follow() const { return follow_; }
   // Draws one frame into the current framebuffer and waits for the GPU (for the benchmark).
   double renderFrameAndFinish();
+  // The view as it is now, rendered offscreen at `size` pixels (4x multisampled): image exports
+  // at a resolution other than the window's.
+  QImage renderImage(const QSize& size);
   double lastFrameMilliseconds() const { return lastFrameMs_; }
 
   // The pixel position of a world point (for tests driving the mouse).
@@ -90,6 +98,9 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   bool dirty_ = true;
   bool pinTool_ = false;
   bool poseTool_ = false;
+  bool follow_ = false;
+  glm::vec3 followOffset_{0.0f};
+  std::optional<glm::vec3> followedCentre() const;  // the followed character's centre of mass now
   bool framedOnce_ = false;
 
   std::unique_ptr<QOpenGLShaderProgram> solidShader_, lineShader_;
@@ -97,6 +108,7 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   QOpenGLVertexArrayObject lineVao_;
   QOpenGLBuffer lineVbo_{QOpenGLBuffer::VertexBuffer};
   double lastFrameMs_ = 0;
+  QSize renderSize_;  // the offscreen image's size while renderImage draws; invalid otherwise
 
   // Mouse state.
   enum class Drag { None, Orbit, Pan, Zoom, Handle, Click, Pose } drag_ = Drag::None;
