@@ -1370,6 +1370,54 @@ class EditorTest : public QObject {
     QVERIFY(!doc.posed());
   }
 
+  // Posing by inverse kinematics: with the pose tool, Shift+drag on the lamp's head pulls the
+  // grabbed point through the plane facing the camera and the arm's joints follow, the base (the
+  // root) held: the point ends under the mouse.
+  void shiftDragPullsABodyPointByInverseKinematics() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    w.viewport()->frameAll();
+    Document& doc = *w.document();
+    w.findChild<QAction*>("poseTool")->trigger();
+    const Model<double>& model = doc.models()[0];
+    const Eigen::VectorXd before = doc.posesNow()[0];
+    const int head = model.bodyIndex("head");
+    glm::vec3 centre(0.0f);
+    for (const Solid& s : w.viewport()->renderScene().solids)
+      if (s.body == "head" && !s.ghost) centre = glm::vec3(s.transform[3]);
+    const QPointF p0 = w.viewport()->toPixel(centre);
+    // Where the press hits the head, and the plane the point then moves in.
+    const float width = static_cast<float>(w.viewport()->width()), height = static_cast<float>(w.viewport()->height());
+    glm::vec3 o, dir;
+    w.viewport()->camera().ray(p0.x(), p0.y(), width, height, &o, &dir);
+    const std::optional<Pick> hit = pickSolid(w.viewport()->renderScene(), o, dir);
+    QVERIFY(hit && w.viewport()->renderScene().solids[hit->solid].body == "head");
+    const Eigen::Vector3d local = worldToBody(model, before, head, Eigen::Vector3d(hit->point.x, hit->point.y, hit->point.z));
+    const glm::vec3 normal = glm::normalize(w.viewport()->camera().eye() - w.viewport()->camera().target);
+    const QPoint p1 = (p0 + QPointF(-40, 25)).toPoint();
+    QTest::mousePress(w.viewport(), Qt::LeftButton, Qt::ShiftModifier, p0.toPoint());
+    for (int k = 1; k <= 8; ++k) {
+      const QPointF p = p0 + (QPointF(p1) - p0) * k / 8.0;
+      QMouseEvent move(QEvent::MouseMove, p, w.viewport()->mapToGlobal(p), Qt::NoButton, Qt::LeftButton, Qt::ShiftModifier);
+      QApplication::sendEvent(w.viewport(), &move);
+    }
+    QTest::mouseRelease(w.viewport(), Qt::LeftButton, Qt::ShiftModifier, p1);
+    QVERIFY(doc.posed());
+    const Eigen::VectorXd posed = doc.posed()->q;
+    // On screen the grabbed point is under the mouse. (In space it is within 2 mm of the mouse's
+    // ray in that plane: a planar lamp's point moves in its own plane, which the camera, looking
+    // slightly down, does not face exactly.)
+    w.viewport()->camera().ray(p1.x(), p1.y(), width, height, &o, &dir);
+    const glm::vec3 target = o + dir * (glm::dot(hit->point - o, normal) / glm::dot(dir, normal));
+    const Eigen::Vector3d reached = bodyToWorld(model, posed, head, local);
+    const QPointF shown = w.viewport()->toPixel(glm::vec3(reached.x(), reached.y(), reached.z()));
+    QVERIFY2(std::hypot(shown.x() - p1.x(), shown.y() - p1.y()) < 1.0,
+             qPrintable(QString("%1 %2").arg(shown.x() - p1.x()).arg(shown.y() - p1.y())));
+    QVERIFY((reached - Eigen::Vector3d(target.x, target.y, target.z)).norm() < 2e-3);
+    for (const char* root : {"base_x", "base_y", "base_rz"}) QCOMPARE(posed[model.dofIndex(root)], before[model.dofIndex(root)]);
+    QVERIFY((posed - before).cwiseAbs().maxCoeff() > 0.05);
+  }
+
   // Home frames all even when the builder's tree has the focus (the tree took the key to go to
   // its first row).
   void homeInAFocusedTreeFramesAll() {

@@ -12,6 +12,7 @@
 
 #include "core/shape_mesh.h"
 #include "dynamics/algorithms.h"
+#include "dynamics/inverse_kinematics.h"
 
 namespace spacetime::ui {
 
@@ -331,13 +332,13 @@ void Viewport::mousePressEvent(QMouseEvent* e) {
       doc_->selectTerm(hd.term);
       dragPlanePoint_ = hd.position;
       dragPlaneNormal_ = glm::normalize(camera_.eye() - camera_.target);
-    } else if (!(poseTool_ && !pinTool_ && startPose(e->position()))) {
+    } else if (!(poseTool_ && !pinTool_ && startPose(e->position(), e->modifiers() & Qt::ShiftModifier))) {
       drag_ = Drag::Click;
     }
   }
 }
 
-bool Viewport::startPose(const QPointF& pos) {
+bool Viewport::startPose(const QPointF& pos, bool ik) {
   glm::vec3 o, dir;
   camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(height()), &o, &dir);
   const RenderScene& rs = renderScene();
@@ -346,8 +347,18 @@ bool Viewport::startPose(const QPointF& pos) {
   const Solid& s = rs.solids[pick->solid];
   const Model<double>& model = doc_->models()[s.character];
   const Eigen::VectorXd q = doc_->posesNow()[s.character];
-  const std::optional<PoseJoint> joint = poseJoint(model, q, model.bodyIndex(s.body));
+  const int body = model.bodyIndex(s.body);
   doc_->selectBody(s.character, s.body);
+  if (ik) {
+    // The grabbed point follows the mouse in the plane facing the camera; the chain up to the
+    // root turns to take it there.
+    if (ikChain(model, body).empty()) return false;
+    const Eigen::Vector3d hit(pick->point.x, pick->point.y, pick->point.z);
+    drag_ = Drag::PoseIk;
+    ik_ = {s.character, body, worldToBody(model, q, body, hit), pick->point, glm::normalize(camera_.eye() - camera_.target)};
+    return true;
+  }
+  const std::optional<PoseJoint> joint = poseJoint(model, q, body);
   if (!joint) return false;
   drag_ = Drag::Pose;
   pose_ = {s.character, joint->dof, q, 0.0, screenAngle(*joint, pos)};
@@ -359,6 +370,18 @@ bool Viewport::startPose(const QPointF& pos) {
 double Viewport::screenAngle(const PoseJoint& joint, const QPointF& pos) const {
   const QPointF c = toPixel(glm::vec3(static_cast<float>(joint.pivot.x()), static_cast<float>(joint.pivot.y()), static_cast<float>(joint.pivot.z())));
   return std::atan2(-(pos.y() - c.y()), pos.x() - c.x());  // screen y grows downwards
+}
+
+void Viewport::dragIk(const QPointF& pos) {
+  glm::vec3 o, dir;
+  camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(height()), &o, &dir);
+  const float denom = glm::dot(dir, ik_.normal);
+  if (std::abs(denom) < 1e-6f) return;
+  const glm::vec3 p = o + dir * (glm::dot(ik_.planePoint - o, ik_.normal) / denom);
+  const Model<double>& model = doc_->models()[ik_.character];
+  // From the pose on show, so the chain moves on from where it is (no jumps between branches).
+  const IkResult r = solvePointIk(model, doc_->posesNow()[ik_.character], ik_.body, ik_.local, Eigen::Vector3d(p.x, p.y, p.z));
+  doc_->setPosed(ik_.character, r.q);
 }
 
 void Viewport::dragPose(const QPointF& pos) {
@@ -400,6 +423,7 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
       break;
     }
     case Drag::Pose: dragPose(e->position()); break;
+    case Drag::PoseIk: dragIk(e->position()); break;
     default: break;
   }
 }

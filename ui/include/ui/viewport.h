@@ -41,8 +41,9 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   void setPinTool(bool on) { pinTool_ = on; }
   bool pinTool() const { return pinTool_; }
   // The pose tool: a left drag on a body turns its joint around the ring drawn at the joint (the
-  // angle the mouse sweeps around the joint on screen, within the joint's limits), leaving an
-  // unkeyed pose that K keys.
+  // angle the mouse sweeps around the joint on screen, within the joint's limits); Shift+drag
+  // pulls the grabbed point and the joints up to the root follow (inverse kinematics). Either
+  // leaves an unkeyed pose that K keys.
   void setPoseTool(bool on) {
     poseTool_ = on;
     invalidate();
@@ -86,7 +87,9 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   void drawSolid(const Solid& s);  // with the solid shader bound
   void drawLines(const std::vector<float>& vertices, GLenum mode, const glm::mat4& viewProjection);
   void clickAt(const QPointF& pos);
-  bool startPose(const QPointF& pos);  // false: no body with a turning joint there
+  // false: no body there whose joint turns (ik: no joints between it and the root).
+  bool startPose(const QPointF& pos, bool ik);
+  void dragIk(const QPointF& pos);
   void dragPose(const QPointF& pos);
   double screenAngle(const PoseJoint& joint, const QPointF& pos) const;
   int handleAt(const QPointF& pos);
@@ -111,7 +114,12 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   QSize renderSize_;  // the offscreen image's size while renderImage draws; invalid otherwise
 
   // Mouse state.
-  enum class Drag { None, Orbit, Pan, Zoom, Handle, Click, Pose } drag_ = Drag::None;
+  enum class Drag { None, Orbit, Pan, Zoom, Handle, Click, Pose, PoseIk } drag_ = Drag::None;
+  struct IkDrag {
+    int character = -1, body = -1;
+    Eigen::Vector3d local = Eigen::Vector3d::Zero();  // the grabbed point, in the body's frame
+    glm::vec3 planePoint{0.0f}, normal{0.0f, 0.0f, 1.0f};  // the plane it moves in
+  } ik_;
   struct PoseDrag {
     int character = -1, dof = -1;
     Eigen::VectorXd start;  // the pose when the drag began
