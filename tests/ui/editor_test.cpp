@@ -25,6 +25,7 @@
 #include <QTimer>
 #include <QToolButton>
 #include <QProgressBar>
+#include <QPushButton>
 #include <QtTest>
 #include <cstring>
 #include <map>
@@ -1416,6 +1417,58 @@ class EditorTest : public QObject {
     QVERIFY((reached - Eigen::Vector3d(target.x, target.y, target.z)).norm() < 2e-3);
     for (const char* root : {"base_x", "base_y", "base_rz"}) QCOMPARE(posed[model.dofIndex(root)], before[model.dofIndex(root)]);
     QVERIFY((posed - before).cwiseAbs().maxCoeff() > 0.05);
+  }
+
+  // A contact's points from the viewport: the form's "Add by clicking the body", then a click on
+  // the base adds the clicked point (in the base's frame) as one undo step; "Remove the last"
+  // takes it off again, and the last point cannot go.
+  void contactPointsAreAddedByClickingTheBody() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1200, 800)));
+    w.viewport()->frameAll();
+    Document& doc = *w.document();
+    doc.selectTerm("takeoff");
+    auto points = [&] {
+      for (const TermSpec& t : doc.scene().terms)
+        if (t.id == "takeoff") return t.points;
+      return std::vector<Eigen::Vector3d>();
+    };
+    const std::vector<Eigen::Vector3d> before = points();
+    QCOMPARE(before.size(), size_t(2));
+    auto* add = w.constraints()->form()->findChild<QPushButton*>("addContactPoint");
+    QVERIFY(add);
+    add->click();
+    QCOMPARE(w.viewport()->contactPointTool(), std::string("takeoff"));
+    // The base's centre on screen, and where that ray hits it.
+    glm::vec3 centre(0.0f);
+    for (const Solid& s : w.viewport()->renderScene().solids)
+      if (s.body == "base" && !s.ghost) centre = glm::vec3(s.transform[3]);
+    const QPoint at = w.viewport()->toPixel(centre).toPoint();
+    glm::vec3 o, dir;
+    w.viewport()->camera().ray(at.x(), at.y(), static_cast<float>(w.viewport()->width()),
+                               static_cast<float>(w.viewport()->height()), &o, &dir);
+    const std::optional<Pick> hit = pickSolid(w.viewport()->renderScene(), o, dir);
+    QVERIFY(hit);
+    const int commands = doc.undoStack()->count();
+    QTest::mouseClick(w.viewport(), Qt::LeftButton, {}, at);
+    QCOMPARE(doc.undoStack()->count(), commands + 1);
+    QVERIFY(w.viewport()->contactPointTool().empty());
+    const std::vector<Eigen::Vector3d> after = points();
+    QCOMPARE(after.size(), size_t(3));
+    const Model<double>& model = doc.models()[0];
+    const Eigen::Vector3d expected =
+        worldToBody(model, doc.posesNow()[0], model.bodyIndex("base"), Eigen::Vector3d(hit->point.x, hit->point.y, hit->point.z));
+    QVERIFY((after[2] - expected).norm() < 1e-9);
+    QVERIFY(std::abs(after[2].x()) < 0.15 && std::abs(after[2].z()) <= 0.08 + 1e-6);  // on the base
+    auto* remove = w.constraints()->form()->findChild<QPushButton*>("removeContactPoint");
+    QVERIFY(remove && remove->isEnabled());
+    remove->click();
+    QCOMPARE(points(), before);
+    remove = w.constraints()->form()->findChild<QPushButton*>("removeContactPoint");
+    remove->click();
+    QCOMPARE(points().size(), size_t(1));
+    remove = w.constraints()->form()->findChild<QPushButton*>("removeContactPoint");
+    QVERIFY(!remove->isEnabled());
   }
 
   // Home frames all even when the builder's tree has the focus (the tree took the key to go to

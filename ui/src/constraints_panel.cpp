@@ -1,5 +1,9 @@
 #include "ui/constraints_panel.h"
 
+#include <QPushButton>
+
+#include <QHBoxLayout>
+
 #include <QHeaderView>
 #include <QMenu>
 #include <QScrollArea>
@@ -133,13 +137,17 @@ void ConstraintsPanel::rebuildList() {
 
 void ConstraintsPanel::rebuildForm() {
   const std::string id = doc_->selectedTerm();
-  const bool exists = findTerm(doc_->scene(), id) != nullptr;
-  if (exists && id == formTerm_) {
+  const TermSpec* term = findTerm(doc_->scene(), id);
+  const bool exists = term != nullptr;
+  // The same term with as many rows (points, key values) as the form has: refresh its values.
+  const std::pair<size_t, size_t> rows = exists ? std::pair{term->points.size(), term->values.size()} : std::pair<size_t, size_t>{};
+  if (exists && id == formTerm_ && rows == formRows_) {
     form_->refresh();
     return;
   }
   form_->clear();
   formTerm_ = exists ? id : std::string();
+  formRows_ = rows;
   if (!exists) return;
   termForm(id);
   form_->refresh();
@@ -240,6 +248,26 @@ void ConstraintsPanel::termForm(const std::string& id) {
                          [edit, k](Scene& s, const Eigen::Vector3d& v) {
                            edit(s, [&](TermSpec& t) { if (k < t.points.size()) t.points[k] = v; });
                          }, -100, 100, 0.01, 3);
+      {
+        // More points by clicking the body in the viewport; the last one off (one stays).
+        auto* buttons = new QWidget;
+        auto* row = new QHBoxLayout(buttons);
+        row->setContentsMargins(0, 0, 0, 0);
+        auto* pick = new QPushButton(tr("Add by clicking the body"));
+        pick->setObjectName("addContactPoint");
+        connect(pick, &QPushButton::clicked, this, [this, id] { emit pickContactPoint(id); });
+        auto* drop = new QPushButton(tr("Remove the last"));
+        drop->setObjectName("removeContactPoint");
+        drop->setEnabled(term.points.size() > 1);
+        connect(drop, &QPushButton::clicked, this, [this, id] {
+          doc_->edit(tr("Remove contact point"), [&](Scene& s) {
+            if (TermSpec* t = findTerm(s, id); t && t->points.size() > 1) t->points.pop_back();
+          });
+        });
+        row->addWidget(pick);
+        row->addWidget(drop);
+        form_->addWidget(tr("Points"), buttons);
+      }
       break;
     case TermKind::Clearance:
       bodyRow(false);

@@ -62,6 +62,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   connect(builder_, &BuilderPanel::said, this, [this](const QString& m) { progress_->setText(m); });
   constraints_ = new ConstraintsPanel(&doc_);
   connect(constraints_, &ConstraintsPanel::said, this, [this](const QString& m) { progress_->setText(m); });
+  connect(constraints_, &ConstraintsPanel::pickContactPoint, this, [this](const std::string& term) {
+    viewport_->setContactPointTool(term);
+    progress_->setText(tr("Click the body where contact '%1' gets a new point").arg(QString::fromStdString(term)));
+  });
   timeline_ = new Timeline(&doc_);
   graphs_ = new GraphPanel(&doc_);
   QDockWidget* builderDock = dock(tr("Builder"), "builderDock", builder_, Qt::LeftDockWidgetArea);

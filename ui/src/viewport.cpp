@@ -436,6 +436,25 @@ void Viewport::mouseReleaseEvent(QMouseEvent* e) {
   drag_ = Drag::None;
 }
 
+bool Viewport::addContactPoint(const Solid& s, const glm::vec3& hit) {
+  const std::string term = contactPointTerm_;
+  contactPointTerm_.clear();
+  emit contactPointToolUsed();
+  const Scene& scene = doc_->scene();
+  const auto t = std::find_if(scene.terms.begin(), scene.terms.end(), [&](const TermSpec& x) { return x.id == term; });
+  if (t == scene.terms.end() || t->kind != TermKind::Contact || t->body != s.body ||
+      scene.characters[s.character].id != t->character)
+    return false;  // another body: an ordinary click
+  const Model<double>& model = doc_->models()[s.character];
+  const Eigen::Vector3d local =
+      worldToBody(model, doc_->posesNow()[s.character], model.bodyIndex(s.body), Eigen::Vector3d(hit.x, hit.y, hit.z));
+  doc_->edit(tr("Add contact point"), [&](Scene& sc) {
+    for (TermSpec& x : sc.terms)
+      if (x.id == term) x.points.push_back(local);
+  });
+  return true;
+}
+
 void Viewport::clickAt(const QPointF& pos) {
   glm::vec3 o, dir;
   camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(height()), &o, &dir);
@@ -446,6 +465,7 @@ void Viewport::clickAt(const QPointF& pos) {
     return;
   }
   const Solid& s = rs.solids[pick->solid];
+  if (!contactPointTerm_.empty() && addContactPoint(s, pick->point)) return;
   doc_->selectBody(s.character, s.body);
   if (!pinTool_) return;
   // Pin the clicked point of the body where it is now, at the current time.

@@ -36,6 +36,8 @@ class ConstraintsPanel : public QWidget {
  signals:
   // What a command did beyond the obvious (a key that replaced another, pins it removed).
   void said(const QString& message);
+  // The contact's "Add by clicking the body": the viewport's next click on it adds the point.
+  void pickContactPoint(const std::string& term);
 
  private:
   void rebuildList();
@@ -51,6 +53,7 @@ class ConstraintsPanel : public QWidget {
   QTreeWidget* list_;
   PropertyForm* form_;
   std::string formTerm_;
+  std::pair<size_t, size_t> formRows_;  // the form's term's points and key values when built
   bool syncing_ = false;
 };
 

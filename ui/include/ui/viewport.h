@@ -39,6 +39,10 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
 
   void frameAll();
   void setPinTool(bool on) { pinTool_ = on; }
+  // The next click on the contact term's body adds the clicked point (in the body's frame) to
+  // its points, as one undo step; a click elsewhere only selects.
+  void setContactPointTool(const std::string& term) { contactPointTerm_ = term; }
+  const std::string& contactPointTool() const { return contactPointTerm_; }
   bool pinTool() const { return pinTool_; }
   // The pose tool: a left drag on a body turns its joint around the ring drawn at the joint (the
   // angle the mouse sweeps around the joint on screen, within the joint's limits); Shift+drag
@@ -68,6 +72,7 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
 
  signals:
   void pinToolUsed();
+  void contactPointToolUsed();
 
  protected:
   void initializeGL() override;
@@ -101,6 +106,8 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   bool dirty_ = true;
   bool pinTool_ = false;
   bool poseTool_ = false;
+  std::string contactPointTerm_;  // the contact the next click adds a point to (empty: none)
+  bool addContactPoint(const Solid& s, const glm::vec3& hit);  // false: not the contact's body
   bool follow_ = false;
   glm::vec3 followOffset_{0.0f};
   std::optional<glm::vec3> followedCentre() const;  // the followed character's centre of mass now
