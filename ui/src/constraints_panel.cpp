@@ -369,21 +369,17 @@ std::string ConstraintsPanel::keyCurrentPose() {
     if (term.kind == TermKind::Keyframe && rekeyed.empty()) rekeyed = term.id;
     if (term.kind == TermKind::Pin) pins << QString("'%1'").arg(QString::fromStdString(term.id));
   }
-  const std::string id = rekeyed.empty() ? doc_->uniqueTermId("key") : rekeyed;
+  TermSpec key = newTerm("key", TermKind::Keyframe, c);
+  key.time = t;
+  key.values = values;
+  const std::string id = rekeyed.empty() ? key.id : rekeyed;
   doc_->edit(rekeyed.empty() ? tr("Key the current pose") : tr("Re-key the pose"), [&](Scene& s) {
     std::erase_if(s.terms, [&](const TermSpec& term) {
       return sameInstant(term) && (term.kind == TermKind::Pin || (term.kind == TermKind::Keyframe && term.id != id));
     });
-    if (!rekeyed.empty()) {
-      for (TermSpec& term : s.terms)
-        if (term.id == id) term.values = values;
-      return;
-    }
-    TermSpec key = newTerm("key", TermKind::Keyframe, c);
-    key.id = id;
-    key.time = t;
-    key.values = values;
-    s.terms.push_back(key);
+    if (rekeyed.empty()) s.terms.push_back(key);
+    for (TermSpec& term : s.terms)
+      if (term.id == id) term.values = values;
   });
   doc_->selectTerm(id);
   QString message = rekeyed.empty() ? tr("Keyed the pose of '%1' at t = %2 s as '%3'")

@@ -324,13 +324,13 @@ void MainWindow::createActions() {
   edit->addSeparator();
   QAction* pinTool = action(edit, tr("Add &pin by clicking a body"), QKeySequence(Qt::Key_P), [this] { viewport_->setPinTool(true); });
   // The pose tool (R, as Blender's rotate): drags on bodies turn their joints; K keys the pose.
-  poseToolAction_ = edit->addAction(tr("Pose: drag a body to tu&rn its joint"));
-  poseToolAction_->setObjectName("poseTool");
-  poseToolAction_->setCheckable(true);
-  poseToolAction_->setShortcut(QKeySequence(Qt::Key_R));
-  poseToolAction_->setToolTip(tr("Drag a body around the ring at its joint to turn the joint; K keys the pose, "
+  QAction* poseTool = edit->addAction(tr("Pose: drag a body to tu&rn its joint"));
+  poseTool->setObjectName("poseTool");
+  poseTool->setCheckable(true);
+  poseTool->setShortcut(QKeySequence(Qt::Key_R));
+  poseTool->setToolTip(tr("Drag a body around the ring at its joint to turn the joint; K keys the pose, "
                                  "changing the time drops it"));
-  connect(poseToolAction_, &QAction::toggled, this, [this](bool on) {
+  connect(poseTool, &QAction::toggled, this, [this](bool on) {
     viewport_->setPoseTool(on);
     if (on) progress_->setText(tr("Pose: drag a body to turn its joint, K keys the pose"));
   });
@@ -398,7 +398,7 @@ void MainWindow::createActions() {
   bar->addAction(redo);
   bar->addSeparator();
   bar->addAction(pinTool);
-  bar->addAction(poseToolAction_);
+  bar->addAction(poseTool);
   pinTool->setCheckable(true);
   connect(viewport_, &Viewport::pinToolUsed, pinTool, [pinTool] { pinTool->setChecked(false); });
 }

@@ -9,11 +9,11 @@
 
 namespace spacetime::ui {
 
-namespace {
-
 glm::vec3 toGlm(const Eigen::Vector3d& v) {
   return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
 }
+
+namespace {
 
 // World pose of a body: Featherstone's X_world maps world to body coordinates, so the body's
 // orientation in the world is E^T and its origin is r.

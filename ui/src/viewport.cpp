@@ -102,8 +102,7 @@ std::optional<glm::vec3> Viewport::followedCentre() const {
   const Model<double>& model = doc_->models()[c];
   Data<double> d(model);
   forwardKinematics(model, d, doc_->posesNow()[c].data());
-  const Eigen::Vector3d com = centerOfMass(model, d);
-  return glm::vec3(static_cast<float>(com.x()), static_cast<float>(com.y()), static_cast<float>(com.z()));
+  return toGlm(centerOfMass(model, d));
 }
 
 void Viewport::setFollow(bool on) {
@@ -355,29 +354,37 @@ bool Viewport::startPose(const QPointF& pos, bool ik) {
     if (ikChain(model, body).empty()) return false;
     const Eigen::Vector3d hit(pick->point.x, pick->point.y, pick->point.z);
     drag_ = Drag::PoseIk;
-    ik_ = {s.character, body, worldToBody(model, q, body, hit), pick->point, glm::normalize(camera_.eye() - camera_.target)};
+    ik_ = {s.character, body, worldToBody(model, q, body, hit)};
+    dragPlanePoint_ = pick->point;
+    dragPlaneNormal_ = glm::normalize(camera_.eye() - camera_.target);
     return true;
   }
   const std::optional<PoseJoint> joint = poseJoint(model, q, body);
   if (!joint) return false;
   drag_ = Drag::Pose;
-  pose_ = {s.character, joint->dof, q, 0.0, screenAngle(*joint, pos)};
   // A joint whose axis points at the viewer turns counter-clockwise on screen as its angle grows.
-  pose_.sign = glm::dot(glm::vec3(joint->axis.cast<float>().x(), joint->axis.cast<float>().y(), joint->axis.cast<float>().z()), camera_.eye() - camera_.target) >= 0 ? 1.0 : -1.0;
+  const double sign = glm::dot(toGlm(joint->axis), camera_.eye() - camera_.target) >= 0 ? 1.0 : -1.0;
+  pose_ = {s.character, *joint, q, 0.0, screenAngle(*joint, pos), sign};
   return true;
 }
 
 double Viewport::screenAngle(const PoseJoint& joint, const QPointF& pos) const {
-  const QPointF c = toPixel(glm::vec3(static_cast<float>(joint.pivot.x()), static_cast<float>(joint.pivot.y()), static_cast<float>(joint.pivot.z())));
+  const QPointF c = toPixel(toGlm(joint.pivot));
   return std::atan2(-(pos.y() - c.y()), pos.x() - c.x());  // screen y grows downwards
 }
 
-void Viewport::dragIk(const QPointF& pos) {
+std::optional<glm::vec3> Viewport::onDragPlane(const QPointF& pos) const {
   glm::vec3 o, dir;
-  camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(height()), &o, &dir);
-  const float denom = glm::dot(dir, ik_.normal);
-  if (std::abs(denom) < 1e-6f) return;
-  const glm::vec3 p = o + dir * (glm::dot(ik_.planePoint - o, ik_.normal) / denom);
+  camera_.ray(pos.x(), pos.y(), static_cast<float>(width()), static_cast<float>(std::max(1, height())), &o, &dir);
+  const float denom = glm::dot(dir, dragPlaneNormal_);
+  if (std::abs(denom) < 1e-6f) return std::nullopt;  // the ray runs along the plane
+  return o + dir * (glm::dot(dragPlanePoint_ - o, dragPlaneNormal_) / denom);
+}
+
+void Viewport::dragIk(const QPointF& pos) {
+  const std::optional<glm::vec3> at = onDragPlane(pos);
+  if (!at) return;
+  const glm::vec3 p = *at;
   const Model<double>& model = doc_->models()[ik_.character];
   // From the pose on show, so the chain moves on from where it is (no jumps between branches).
   const IkResult r = solvePointIk(model, doc_->posesNow()[ik_.character], ik_.body, ik_.local, Eigen::Vector3d(p.x, p.y, p.z));
@@ -386,18 +393,17 @@ void Viewport::dragIk(const QPointF& pos) {
 
 void Viewport::dragPose(const QPointF& pos) {
   const Model<double>& model = doc_->models()[pose_.character];
-  const std::optional<PoseJoint> joint = poseJoint(model, pose_.start, model.dofBody[pose_.dof]);
-  if (!joint) return;
   // The angle swept around the pivot since the press, unwrapped across +-pi step by step.
-  const double now = screenAngle(*joint, pos);
+  const double now = screenAngle(pose_.joint, pos);
   double step = now - pose_.lastAngle;
   step -= 2 * M_PI * std::round(step / (2 * M_PI));
   pose_.swept += step;
   pose_.lastAngle = now;
+  const int dof = pose_.joint.dof;
   Eigen::VectorXd q = pose_.start;
-  q[pose_.dof] += pose_.sign * pose_.swept;
-  const Body<double>& b = model.bodies[model.dofBody[pose_.dof]];
-  if (b.hasPositionLimits) q[pose_.dof] = std::clamp(q[pose_.dof], b.lower, b.upper);
+  q[dof] += pose_.sign * pose_.swept;
+  const Body<double>& b = model.bodies[model.dofBody[dof]];
+  if (b.hasPositionLimits) q[dof] = std::clamp(q[dof], b.lower, b.upper);
   doc_->setPosed(pose_.character, q);
 }
 
@@ -410,11 +416,9 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
     case Drag::Pan: camera_.pan(d.x() / h, d.y() / h); update(); break;
     case Drag::Zoom: camera_.zoom(std::exp(d.y() * 0.01f)); update(); break;
     case Drag::Handle: {
-      glm::vec3 o, dir;
-      camera_.ray(e->position().x(), e->position().y(), static_cast<float>(width()), h, &o, &dir);
-      const float denom = glm::dot(dir, dragPlaneNormal_);
-      if (std::abs(denom) < 1e-6f) break;
-      const glm::vec3 p = o + dir * (glm::dot(dragPlanePoint_ - o, dragPlaneNormal_) / denom);
+      const std::optional<glm::vec3> at = onDragPlane(e->position());
+      if (!at) break;
+      const glm::vec3 p = *at;
       const std::string term = dragTerm_;
       doc_->edit(tr("Move pin"), [&](Scene& s) {
         for (TermSpec& t : s.terms)
@@ -439,7 +443,6 @@ void Viewport::mouseReleaseEvent(QMouseEvent* e) {
 bool Viewport::addContactPoint(const Solid& s, const glm::vec3& hit) {
   const std::string term = contactPointTerm_;
   contactPointTerm_.clear();
-  emit contactPointToolUsed();
   const Scene& scene = doc_->scene();
   const auto t = std::find_if(scene.terms.begin(), scene.terms.end(), [&](const TermSpec& x) { return x.id == term; });
   if (t == scene.terms.end() || t->kind != TermKind::Contact || t->body != s.body ||

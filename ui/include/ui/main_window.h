@@ -109,7 +109,6 @@ class MainWindow : public QMainWindow {
   QAction* stopAction_ = nullptr;
   QAction* autoSolveAction_ = nullptr;
   QAction* showStoppedAction_ = nullptr;
-  QAction* poseToolAction_ = nullptr;
   bool autoSolve_ = false;
   QTimer autosaveTimer_;
   QTimer autosaveSoon_;  // a few seconds after the last edit: a crash loses only that much

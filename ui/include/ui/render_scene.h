@@ -87,6 +87,9 @@ RenderScene buildRenderScene(const Scene& scene, const std::vector<Model<double>
 std::vector<Eigen::VectorXd> posesAt(const Scene& scene, const std::vector<Model<double>>& models,
                                      const SolvedMotion* motion, double t);
 
+// A world point or direction in the renderer's single precision.
+glm::vec3 toGlm(const Eigen::Vector3d& v);
+
 // The joint the pose gizmo turns when a body is dragged: the body's own revolute joint (for a
 // root, the last joint of its chain: a planar root's rotation). Its dof, the pivot (the body's
 // origin) and the unit axis in world at pose q; nullopt for a fixed or sliding joint.

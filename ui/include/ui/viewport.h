@@ -72,7 +72,6 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
 
  signals:
   void pinToolUsed();
-  void contactPointToolUsed();
 
  protected:
   void initializeGL() override;
@@ -95,6 +94,8 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   // false: no body there whose joint turns (ik: no joints between it and the root).
   bool startPose(const QPointF& pos, bool ik);
   void dragIk(const QPointF& pos);
+  // Where the mouse's ray meets the plane of the current drag (dragPlanePoint_, dragPlaneNormal_).
+  std::optional<glm::vec3> onDragPlane(const QPointF& pos) const;
   void dragPose(const QPointF& pos);
   double screenAngle(const PoseJoint& joint, const QPointF& pos) const;
   int handleAt(const QPointF& pos);
@@ -122,19 +123,20 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
 
   // Mouse state.
   enum class Drag { None, Orbit, Pan, Zoom, Handle, Click, Pose, PoseIk } drag_ = Drag::None;
-  struct IkDrag {
+  struct IkDrag {  // the grabbed point moves in the drag plane
     int character = -1, body = -1;
     Eigen::Vector3d local = Eigen::Vector3d::Zero();  // the grabbed point, in the body's frame
-    glm::vec3 planePoint{0.0f}, normal{0.0f, 0.0f, 1.0f};  // the plane it moves in
   } ik_;
   struct PoseDrag {
-    int character = -1, dof = -1;
+    int character = -1;
+    PoseJoint joint;        // the joint turned, as it was when the drag began
     Eigen::VectorXd start;  // the pose when the drag began
     double swept = 0, lastAngle = 0, sign = 1;
   } pose_;
   QPointF last_, pressPos_;
   std::string dragTerm_;
   int dragSerial_ = 0;
+  // The plane facing the camera that a dragged pin handle or pulled body point moves in.
   glm::vec3 dragPlanePoint_{0.0f}, dragPlaneNormal_{0.0f, 0.0f, 1.0f};
 };
 
