@@ -1450,9 +1450,11 @@ class EditorTest : public QObject {
     const std::optional<Pick> hit = pickSolid(w.viewport()->renderScene(), o, dir);
     QVERIFY(hit);
     const int commands = doc.undoStack()->count();
+    QVERIFY(w.statusText().contains("Click the body"));
     QTest::mouseClick(w.viewport(), Qt::LeftButton, {}, at);
     QCOMPARE(doc.undoStack()->count(), commands + 1);
     QVERIFY(w.viewport()->contactPointTool().empty());
+    QVERIFY2(w.statusText().contains("point added"), qPrintable(w.statusText()));  // not the stale request
     const std::vector<Eigen::Vector3d> after = points();
     QCOMPARE(after.size(), size_t(3));
     const Model<double>& model = doc.models()[0];
@@ -1469,6 +1471,13 @@ class EditorTest : public QObject {
     QCOMPARE(points().size(), size_t(1));
     remove = w.constraints()->form()->findChild<QPushButton*>("removeContactPoint");
     QVERIFY(!remove->isEnabled());
+    // A click on empty space ends the tool with nothing added, and says so.
+    doc.selectTerm("takeoff");
+    w.constraints()->form()->findChild<QPushButton*>("addContactPoint")->click();
+    QTest::mouseClick(w.viewport(), Qt::LeftButton, {}, QPoint(3, 3));
+    QVERIFY(w.viewport()->contactPointTool().empty());
+    QCOMPARE(points().size(), size_t(1));
+    QVERIFY2(w.statusText().contains("no point added"), qPrintable(w.statusText()));
   }
 
   // Home frames all even when the builder's tree has the focus (the tree took the key to go to

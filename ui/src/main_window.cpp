@@ -66,6 +66,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     viewport_->setContactPointTool(term);
     progress_->setText(tr("Click the body where contact '%1' gets a new point").arg(QString::fromStdString(term)));
   });
+  connect(viewport_, &Viewport::contactPointToolDone, this, [this](const QString& term, bool added) {
+    progress_->setText(added ? tr("Contact '%1': point added (Ctrl+Z removes it)").arg(term)
+                             : tr("Contact '%1': the click missed its body, no point added").arg(term));
+  });
   timeline_ = new Timeline(&doc_);
   graphs_ = new GraphPanel(&doc_);
   QDockWidget* builderDock = dock(tr("Builder"), "builderDock", builder_, Qt::LeftDockWidgetArea);

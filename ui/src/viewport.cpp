@@ -446,8 +446,10 @@ bool Viewport::addContactPoint(const Solid& s, const glm::vec3& hit) {
   const Scene& scene = doc_->scene();
   const auto t = std::find_if(scene.terms.begin(), scene.terms.end(), [&](const TermSpec& x) { return x.id == term; });
   if (t == scene.terms.end() || t->kind != TermKind::Contact || t->body != s.body ||
-      scene.characters[s.character].id != t->character)
+      scene.characters[s.character].id != t->character) {
+    emit contactPointToolDone(QString::fromStdString(term), false);
     return false;  // another body: an ordinary click
+  }
   const Model<double>& model = doc_->models()[s.character];
   const Eigen::Vector3d local =
       worldToBody(model, doc_->posesNow()[s.character], model.bodyIndex(s.body), Eigen::Vector3d(hit.x, hit.y, hit.z));
@@ -455,6 +457,7 @@ bool Viewport::addContactPoint(const Solid& s, const glm::vec3& hit) {
     for (TermSpec& x : sc.terms)
       if (x.id == term) x.points.push_back(local);
   });
+  emit contactPointToolDone(QString::fromStdString(term), true);
   return true;
 }
 
@@ -464,6 +467,10 @@ void Viewport::clickAt(const QPointF& pos) {
   const RenderScene& rs = renderScene();
   const std::optional<Pick> pick = pickSolid(rs, o, dir);
   if (!pick) {
+    if (!contactPointTerm_.empty()) {  // a click on nothing ends the tool too
+      emit contactPointToolDone(QString::fromStdString(contactPointTerm_), false);
+      contactPointTerm_.clear();
+    }
     doc_->selectBody(doc_->selectedCharacter(), {});
     return;
   }

@@ -72,6 +72,9 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
 
  signals:
   void pinToolUsed();
+  // The click that ends the contact-point tool: added says whether the contact got its point
+  // (false: the click was off the contact's body, and nothing changed).
+  void contactPointToolDone(const QString& term, bool added);
 
  protected:
   void initializeGL() override;
