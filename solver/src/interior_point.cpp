@@ -351,8 +351,7 @@ SolverSummary solveInteriorPoint(SpacetimeProblem& problem, const SolverOptions&
   if (!configure(*app, options))
     return finish(SolveStatus::InvalidOptions, "IPOPT could not be initialised");
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
-  summary.iterations = nlp->iterations();
-  summary.newtonSteps = nlp->iterations();
+  summary.iterations = nlp->iterations();  // counted once: there is no polish (newtonSteps stays 0)
   summary.jacobianSeconds = nlp->evaluationSeconds();
   summary.hessianSeconds = nlp->hessianSeconds();
 

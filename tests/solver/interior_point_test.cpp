@@ -37,6 +37,9 @@ TEST(InteriorPoint, ParticleReachesTheAnalyticOptimum) {
     EXPECT_NEAR(s.objective, expected, expected * 1e-7) << name;
     EXPECT_LT(s.maxViolation, 1e-7) << name;
     EXPECT_LT(checkValidity(*problem).maxPinError, 1e-7) << name;
+    // Its iterations are counted once, as iterations: there is no Newton polish after IPOPT.
+    EXPECT_GT(s.iterations, 0) << name;
+    EXPECT_EQ(s.newtonSteps, 0) << name;
   }
 }
 
