@@ -2,7 +2,8 @@
 # Re-measures every speed figure docs/performance.md and the README quote, on this machine, from
 # the Release build: the solve and expression benchmarks (medians of 5 repetitions) and the jump
 # ladder through spacetime-cli (single runs: the rungs take seconds to tens of seconds). Prints
-# the tables in the documents' form. Takes about 12 minutes on the 2-core machine.
+# the tables in the documents' form. Takes about 12 minutes on the 2-core machine, plus the
+# scaling rows (single solves, about 10 minutes in all).
 #
 #   scripts/measure.sh            everything
 #   scripts/measure.sh benchmarks the benchmarks only
@@ -15,7 +16,7 @@ trap 'rm -rf "$tmp"' EXIT
 
 echo "## Solves from the default guess (solve_benchmark, medians of 5)"
 echo
-"$bench/solve_benchmark" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+"$bench/solve_benchmark" --benchmark_filter=-Scaling --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
   --benchmark_format=json --benchmark_out="$tmp/solve.json" --benchmark_out_format=json > /dev/null
 python3 - "$tmp/solve.json" <<'PY'
 import json, sys
@@ -86,6 +87,35 @@ for b in json.load(open(sys.argv[1]))["benchmarks"]:
         print(f"| {name} | {ms:.3g} ms |")
 PY
 [ "${1:-}" = benchmarks ] && exit 0
+
+echo
+echo "## Scaling (solve_benchmark's Scaling rows, 2 threads, single runs)"
+echo
+"$bench/solve_benchmark" --benchmark_filter=Scaling --benchmark_format=json \
+  --benchmark_out="$tmp/scaling.json" --benchmark_out_format=json > /dev/null
+python3 - "$tmp/scaling.json" <<'PY'
+import json, math, sys
+rows = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("run_type") == "iteration"]
+print("| scene | clip | dofs | time | LM iterations + Newton steps | ms per LM iteration | transcriptions | valid |")
+print("|---|---|---|---|---|---|---|---|")
+for b in rows:
+    name = b["run_name"].replace("BM_Scaling/", "").split("/")[0]
+    s = b["real_time"] / 1e3
+    print(f"| {name} | {b['clip_seconds']:.1f} s | {b['dofs']:.0f} | {s:.3g} s | {b['lm_iterations']:.0f} + {b['newton_steps']:.0f} | "
+          f"{b.get('lm_ms_per_iteration', 0):.2f} | {b['transcriptions']:.0f} | {'yes' if b['valid'] else 'no'} |")
+def slope(points):  # least-squares exponent of y = c x^a
+    xs = [math.log(x) for x, _ in points]; ys = [math.log(y) for _, y in points]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+for kind, key in (("hops", "clip_seconds"), ("chain", "dofs")):
+    sel = [b for b in rows if f"/{kind}_" in b["run_name"] and b["valid"]]
+    if len(sel) < 2:
+        continue
+    t = slope([(b[key], b["real_time"]) for b in sel])
+    per = slope([(b[key], b["lm_ms_per_iteration"]) for b in sel])
+    its = slope([(b[key], b["lm_iterations"] + b["newton_steps"]) for b in sel])
+    print(f"\n{kind} (valid rows): time ~ {key}^{t:.2f}, iterations ~ {key}^{its:.2f}, ms per LM iteration ~ {key}^{per:.2f}")
+PY
 
 echo
 echo "## The jump ladder (spacetime-cli solve, 2 threads, single runs)"

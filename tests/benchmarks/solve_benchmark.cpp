@@ -112,10 +112,11 @@ void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02
   reportSteps(state, last);
 }
 
-// A rung of the jump ladder (tests/scenes/ladder/) solved as spacetime-cli solves it: 2 threads,
-// refining the transcription until the motion passes the validity report.
-void BM_Ladder(benchmark::State& state, const std::string& name) {
-  const Scene scene = testing::testScene("ladder/" + name);
+// A scene kept for tests (tests/scenes/PATH) solved as spacetime-cli solves it: 2 threads,
+// refining the transcription until the motion passes the validity report. Reports the clip's
+// length and the characters' dofs, which the scaling rows relate the time to.
+void solveAsTheCli(benchmark::State& state, const std::string& path, double maxSeconds) {
+  const Scene scene = testing::testScene(path);
   bool valid = true;
   RefinedSolve last;
   for (auto _ : state) {
@@ -125,15 +126,28 @@ void BM_Ladder(benchmark::State& state, const std::string& name) {
     state.ResumeTiming();
     SolverOptions options = solverOptionsFor(scene.solver);
     options.threads = 2;
-    options.maxSeconds = 120;
+    options.maxSeconds = maxSeconds;
     last = solveRefined(std::move(problem), options, RefinementOptions());
     valid = valid && last.valid;
   }
   state.counters["valid"] = valid ? 1 : 0;
   state.counters["transcriptions"] = static_cast<double>(last.attempts.size());
   state.counters["objective"] = last.summary.objective;
+  state.counters["clip_seconds"] = scene.endTime - scene.startTime;
+  int dofs = 0;
+  for (const CharacterSpec& c : scene.characters) dofs += static_cast<int>(c.dofNames().size());
+  state.counters["dofs"] = dofs;
   reportSteps(state, last.summary);
 }
+
+// A rung of the jump ladder (tests/scenes/ladder/).
+void BM_Ladder(benchmark::State& state, const std::string& name) { solveAsTheCli(state, "ladder/" + name, 120); }
+
+// How the cost grows with the clip and with the character (tests/scenes/scaling/): the shipped
+// jump repeated as 1, 2 and 3 consecutive hops (clips of 1.2, 2.4 and 3.6 s), and the same jump by
+// a lamp whose arms are split into more, shorter links (6, 9, 12 and 15 dofs, the same length and
+// mass). scripts/measure.sh fits the exponents of time against clip length and dofs.
+void BM_Scaling(benchmark::State& state, const std::string& name) { solveAsTheCli(state, "scaling/" + name, 300); }
 
 // One full residual + Jacobian evaluation of the jump; with `freeLiftOff`, the take-off's end is
 // a variable (its window's residuals rebuild their input maps from it at every evaluation).
@@ -187,6 +201,13 @@ BENCHMARK_CAPTURE(BM_Ladder, jump_0_6m, std::string("luxo_jump_0.6m.json"))->Uni
 BENCHMARK_CAPTURE(BM_Ladder, jump_0_9m, std::string("luxo_jump_0.9m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Ladder, jump_1_2m, std::string("luxo_jump_1.2m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Ladder, hurdle_double, std::string("luxo_hurdle_double.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, hops_1, std::string("luxo_hops_1.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, hops_2, std::string("luxo_hops_2.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, hops_3, std::string("luxo_hops_3.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, chain_6, std::string("luxo_chain_6.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, chain_9, std::string("luxo_chain_9.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, chain_12, std::string("luxo_chain_12.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Scaling, chain_15, std::string("luxo_chain_15.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, fixed_lift_off, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, free_lift_off, true)->Unit(benchmark::kMillisecond);
 
