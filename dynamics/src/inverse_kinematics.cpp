@@ -18,12 +18,25 @@ std::vector<int> ikChain(const Model<double>& model, int body) {
   return dofs;
 }
 
+std::vector<int> plantedIkDofs(const Model<double>& model) {
+  std::vector<int> dofs;
+  for (int dof = 0; dof < model.dofCount(); ++dof) {
+    const Body<double>& link = model.bodies[model.dofBody[dof]];
+    const bool root = link.isVirtual || link.parent < 0 || model.bodies[link.parent].isVirtual;
+    if (!(root && link.joint.type == JointType::Revolute)) dofs.push_back(dof);
+  }
+  return dofs;
+}
+
 Eigen::Matrix3Xd pointJacobian(const Model<double>& model, const Data<double>& d, int body,
                                const Eigen::Vector3d& local, const std::vector<int>& dofs) {
   const Eigen::Vector3d p = pointPosition(d, body, local);
-  Eigen::Matrix3Xd J(3, dofs.size());
+  Eigen::Matrix3Xd J = Eigen::Matrix3Xd::Zero(3, dofs.size());
+  std::vector<char> moves(model.bodies.size(), 0);  // the body and its ancestors carry the point
+  for (int b = body; b >= 0; b = model.bodies[b].parent) moves[b] = 1;
   for (size_t k = 0; k < dofs.size(); ++k) {
     const int b = model.dofBody[dofs[k]];
+    if (!moves[b]) continue;  // a joint elsewhere in the tree does not move this point
     const Joint<double>& joint = model.bodies[b].joint;
     // The joint's axis and pivot in world: the child frame turns or slides about its own axis.
     const Eigen::Vector3d axis = d.X_world[b].E.transpose() * joint.axis, pivot = d.X_world[b].r;
@@ -39,30 +52,70 @@ Eigen::Matrix3Xd pointJacobian(const Model<double>& model, const Data<double>& d
 
 IkResult solvePointIk(const Model<double>& model, const Eigen::VectorXd& q0, int body, const Eigen::Vector3d& local,
                       const Eigen::Vector3d& target, int maxIterations, double tolerance) {
-  constexpr double kMaxStep = 0.3;  // largest joint change per iteration (rad or m)
-  IkResult out{q0, 0, 0};
-  const std::vector<int> dofs = ikChain(model, body);
+  return solvePlantedIk(model, q0, ikChain(model, body), {body, local, target}, {}, maxIterations, tolerance);
+}
+
+PlantedIkResult solvePlantedIk(const Model<double>& model, const Eigen::VectorXd& q0, const std::vector<int>& dofs,
+                               const IkPoint& pulled, const std::vector<IkPoint>& planted, int maxIterations,
+                               double tolerance) {
+  constexpr double kMaxStep = 0.3;        // largest change of a dof per iteration (rad or m)
+  // A step is accepted when it lowers |pull error| + |planted error|. The planted points' drift
+  // after a step is second order (the pull acts in their null space) and the next step's
+  // correction removes it; weighting it more (100) rejected every step of a 6 cm crouch.
+  const int n = static_cast<int>(dofs.size()), k = static_cast<int>(planted.size());
+  PlantedIkResult out;
+  out.q = q0;
   Data<double> d(model);
+  // The errors (targets minus points) at the pose of d: the pull's, and the planted points' stacked.
+  auto errors = [&](Eigen::Vector3d* pull, Eigen::VectorXd* held) {
+    *pull = pulled.target - pointPosition(d, pulled.body, pulled.local);
+    held->resize(3 * k);
+    for (int i = 0; i < k; ++i)
+      held->segment<3>(3 * i) = planted[i].target - pointPosition(d, planted[i].body, planted[i].local);
+  };
+  auto merit = [&](const Eigen::Vector3d& pull, const Eigen::VectorXd& held) {
+    return pull.norm() + (k ? held.norm() : 0.0);
+  };
   forwardKinematics(model, d, out.q.data());
-  Eigen::Vector3d e = target - pointPosition(d, body, local);
+  Eigen::Vector3d e;
+  Eigen::VectorXd eh;
+  errors(&e, &eh);
   out.error = e.norm();
-  // The damping adapts as in Levenberg-Marquardt: smaller after a step that brings the point
-  // closer, larger (and the step retried) after one that does not.
+  out.plantedError = k ? eh.lpNorm<Eigen::Infinity>() : 0.0;
+  auto done = [&] { return out.error <= tolerance && out.plantedError <= tolerance; };
+  // The damping adapts as in Levenberg-Marquardt: smaller after a step that improves the merit,
+  // larger (and the step retried) after one that does not.
   double lambda = 1e-2;
-  for (; out.iterations < maxIterations && out.error > tolerance && !dofs.empty() && lambda < 1e3; ++out.iterations) {
-    Eigen::Matrix3Xd J = pointJacobian(model, d, body, local, dofs);
+  for (; out.iterations < maxIterations && !done() && n > 0 && lambda < 1e3; ++out.iterations) {
+    Eigen::Matrix3Xd J = pointJacobian(model, d, pulled.body, pulled.local, dofs);
+    Eigen::MatrixXd Jh(3 * k, n);
+    for (int i = 0; i < k; ++i) Jh.middleRows<3>(3 * i) = pointJacobian(model, d, planted[i].body, planted[i].local, dofs);
     Eigen::VectorXd step;
     // A joint at a limit that the step pushes further stays there: its column goes, and the
     // other joints take the whole step (clamping it afterwards lost the direction).
     for (int pass = 0; pass < 2; ++pass) {
-      const Eigen::Matrix3d A = J * J.transpose() + lambda * lambda * Eigen::Matrix3d::Identity();
-      step = J.transpose() * A.ldlt().solve(e);
+      // The planted points' correction first (nearly undamped: they are met where they can be),
+      // then the pull within what leaves them unchanged to first order.
+      Eigen::VectorXd base = Eigen::VectorXd::Zero(n);
+      Eigen::MatrixXd N = Eigen::MatrixXd::Identity(n, n);
+      if (k) {
+        const Eigen::MatrixXd pinv =
+            Jh.transpose() * (Jh * Jh.transpose() + 1e-12 * Eigen::MatrixXd::Identity(3 * k, 3 * k)).ldlt().solve(
+                                 Eigen::MatrixXd::Identity(3 * k, 3 * k));
+        base = pinv * eh;
+        N -= pinv * Jh;
+      }
+      const Eigen::Matrix3Xd JN = J * N;
+      const Eigen::Matrix3d A = JN * JN.transpose() + lambda * lambda * Eigen::Matrix3d::Identity();
+      step = base + N * (JN.transpose() * A.ldlt().solve(e - J * base));
       bool frozen = false;
-      for (size_t k = 0; k < dofs.size(); ++k) {
-        const Body<double>& link = model.bodies[model.dofBody[dofs[k]]];
-        const double v = out.q[dofs[k]], dq = step[static_cast<Eigen::Index>(k)];
-        if (link.hasPositionLimits && ((v <= link.lower && dq < 0) || (v >= link.upper && dq > 0)) && J.col(k).any()) {
-          J.col(k).setZero();
+      for (int c = 0; c < n; ++c) {
+        const Body<double>& link = model.bodies[model.dofBody[dofs[c]]];
+        const double v = out.q[dofs[c]], dq = step[c];
+        if (link.hasPositionLimits && ((v <= link.lower && dq < 0) || (v >= link.upper && dq > 0)) &&
+            (J.col(c).any() || (k && Jh.col(c).any()))) {
+          J.col(c).setZero();
+          if (k) Jh.col(c).setZero();
           frozen = true;
         }
       }
@@ -70,14 +123,16 @@ IkResult solvePointIk(const Model<double>& model, const Eigen::VectorXd& q0, int
     }
     if (step.cwiseAbs().maxCoeff() > kMaxStep) step *= kMaxStep / step.cwiseAbs().maxCoeff();
     Eigen::VectorXd q = out.q;
-    for (size_t k = 0; k < dofs.size(); ++k) {
-      const Body<double>& link = model.bodies[model.dofBody[dofs[k]]];
-      q[dofs[k]] += step[static_cast<Eigen::Index>(k)];
-      if (link.hasPositionLimits) q[dofs[k]] = std::clamp(q[dofs[k]], link.lower, link.upper);
+    for (int c = 0; c < n; ++c) {
+      const Body<double>& link = model.bodies[model.dofBody[dofs[c]]];
+      q[dofs[c]] += step[c];
+      if (link.hasPositionLimits) q[dofs[c]] = std::clamp(q[dofs[c]], link.lower, link.upper);
     }
     forwardKinematics(model, d, q.data());
-    const Eigen::Vector3d eNew = target - pointPosition(d, body, local);
-    if (eNew.norm() >= out.error) {  // no closer: damp more and retry from the best pose
+    Eigen::Vector3d eNew;
+    Eigen::VectorXd ehNew;
+    errors(&eNew, &ehNew);
+    if (merit(eNew, ehNew) >= merit(e, eh)) {  // no better: damp more and retry from the best pose
       lambda *= 4;
       forwardKinematics(model, d, out.q.data());
       continue;
@@ -85,7 +140,9 @@ IkResult solvePointIk(const Model<double>& model, const Eigen::VectorXd& q0, int
     lambda = std::max(lambda / 3, 1e-6);
     out.q = q;
     e = eNew;
+    eh = ehNew;
     out.error = e.norm();
+    out.plantedError = k ? eh.lpNorm<Eigen::Infinity>() : 0.0;
   }
   return out;
 }

@@ -1,9 +1,11 @@
 // Inverse kinematics for posing, on the shipped characters (the planar lamp, the 3D lamp, the
 // biped): the point Jacobian against central differences of forward kinematics; a target the
 // chain can reach (a point of another random pose) reached to 1e-7 m with the root untouched and
-// every limit kept; a target out of reach ends at the nearest pose, no NaN, no limit crossed.
+// every limit kept; a target out of reach ends at the nearest pose, no NaN, no limit crossed; with
+// planted points (a biped's soles) the pelvis crouches and the soles stay where they were.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <random>
 
@@ -41,8 +43,11 @@ class InverseKinematics : public ::testing::TestWithParam<Case> {
 TEST_P(InverseKinematics, PointJacobianMatchesCentralDifferences) {
   const Model<double> m = model();
   const int body = m.bodyIndex(GetParam().body);
-  const std::vector<int> chain = ikChain(m, body);
-  ASSERT_GE(chain.size(), 2u);
+  ASSERT_GE(ikChain(m, body).size(), 2u);
+  // Every dof, the root's and other branches' too (whose columns must vanish: a joint elsewhere
+  // in the tree does not move the point).
+  std::vector<int> chain;
+  for (int dof = 0; dof < m.dofCount(); ++dof) chain.push_back(dof);
   std::mt19937 rng(3);
   Data<double> d(m);
   const Eigen::Vector3d local(0.03, 0.05, -0.02);
@@ -83,8 +88,12 @@ TEST_P(InverseKinematics, ReachesAReachableTargetWithTheRootHeld) {
     ASSERT_TRUE(r.q.allFinite());
     for (int dof = 0; dof < m.dofCount(); ++dof) {
       const Body<double>& b = m.bodies[m.dofBody[dof]];
-      if (std::find(chain.begin(), chain.end(), dof) == chain.end()) EXPECT_EQ(r.q[dof], q0[dof]);
-      if (b.hasPositionLimits) EXPECT_TRUE(r.q[dof] >= b.lower && r.q[dof] <= b.upper);
+      if (std::find(chain.begin(), chain.end(), dof) == chain.end()) {
+        EXPECT_EQ(r.q[dof], q0[dof]);
+      }
+      if (b.hasPositionLimits) {
+        EXPECT_TRUE(r.q[dof] >= b.lower && r.q[dof] <= b.upper);
+      }
     }
     forwardKinematics(m, d, r.q.data());
     EXPECT_NEAR((pointPosition(d, body, local) - target).norm(), r.error, 1e-12);
@@ -111,8 +120,77 @@ TEST_P(InverseKinematics, TargetOutOfReachEndsAtTheNearestPoseItFinds) {
   EXPECT_GT(r.error, 9.0);                       // a lamp or a leg is not 10 m long
   for (int dof = 0; dof < m.dofCount(); ++dof) {
     const Body<double>& b = m.bodies[m.dofBody[dof]];
-    if (b.hasPositionLimits) EXPECT_TRUE(r.q[dof] >= b.lower && r.q[dof] <= b.upper);
+    if (b.hasPositionLimits) {
+      EXPECT_TRUE(r.q[dof] >= b.lower && r.q[dof] <= b.upper);
+    }
   }
+}
+
+// The pose of a scene's keyframe, in the model's dof order.
+Eigen::VectorXd keyedPose(const Scene& scene, const Model<double>& m, const std::string& key) {
+  const std::vector<std::string> names = scene.characters[0].dofNames();
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(m.dofCount());
+  for (const TermSpec& t : scene.terms)
+    if (t.id == key)
+      for (const auto& [dof, value] : t.values)
+        q[std::find(names.begin(), names.end(), dof) - names.begin()] = value;
+  return q;
+}
+
+// The biped standing on both feet (its start key, each sole's heel and toe planted): its pelvis
+// pulled 6 cm down and 3 cm forward, every joint free and the root's translations. The pelvis point gets there
+// (a crouch), the four sole points stay where they were to 1e-7 m, and the knees stay within
+// their limits. Pulled 1 m down instead - out of reach of legs that cannot fold through the
+// ground - the soles still stay planted and the pelvis goes as low as the legs allow.
+TEST(PlantedInverseKinematics, ABipedsPelvisCrouchesOnPlantedFeet) {
+  const Scene scene = testing::shippedScene("biped_jump.json");
+  const Model<double> m = buildModel(scene.characters[0], scene.gravity);
+  const Eigen::VectorXd q0 = keyedPose(scene, m, "start_pose");
+  Data<double> d(m);
+  forwardKinematics(m, d, q0.data());
+  std::vector<IkPoint> planted;
+  for (const char* foot : {"l_foot", "r_foot"})
+    for (const double x : {-0.06, 0.16}) {
+      const Eigen::Vector3d local(x, -0.05, 0);
+      planted.push_back({m.bodyIndex(foot), local, pointPosition(d, m.bodyIndex(foot), local)});
+    }
+  const std::vector<int> all = plantedIkDofs(m);  // the joints and the root's x and y
+  ASSERT_EQ(all.size(), static_cast<size_t>(m.dofCount() - 1));
+  const int pelvis = m.bodyIndex("pelvis");
+  const Eigen::Vector3d local(0, 0, 0);
+  const Eigen::Vector3d start = pointPosition(d, pelvis, local);
+  for (const double down : {0.06, 1.0}) {
+    const Eigen::Vector3d target = start + Eigen::Vector3d(0.03, -down, 0);
+    const PlantedIkResult r = solvePlantedIk(m, q0, all, {pelvis, local, target}, planted, 200);
+    ASSERT_TRUE(r.q.allFinite());
+    forwardKinematics(m, d, r.q.data());
+    for (const IkPoint& p : planted) {
+      EXPECT_LT((pointPosition(d, p.body, p.local) - p.target).norm(), 1e-7) << down;
+    }
+    EXPECT_LT(r.plantedError, 1e-7);
+    EXPECT_EQ(r.q[m.dofIndex("pelvis_rz")], q0[m.dofIndex("pelvis_rz")]);  // the pelvis moves straight
+    for (int dof = 0; dof < m.dofCount(); ++dof) {
+      const Body<double>& b = m.bodies[m.dofBody[dof]];
+      if (b.hasPositionLimits) {
+        EXPECT_TRUE(r.q[dof] >= b.lower && r.q[dof] <= b.upper) << dof;
+      }
+    }
+    const double reached = pointPosition(d, pelvis, local).y();
+    if (down < 0.1) {
+      EXPECT_LT(r.error, 1e-7);
+    } else {
+      EXPECT_GT(r.error, 0.5);                // the legs are shorter than a metre
+      EXPECT_LT(reached, start.y() - 0.1);    // but it crouched as far as they fold
+    }
+    std::printf("pelvis pulled %.2f m down: %.3g m from its target, soles planted to %.2g m, %d iterations\n", down,
+                r.error, r.plantedError, r.iterations);
+  }
+  // With no planted point and the chain's dofs, it is solvePointIk.
+  const std::vector<int> chain = ikChain(m, m.bodyIndex("l_foot"));
+  const Eigen::Vector3d footTarget = pointPosition(d, m.bodyIndex("l_foot"), local) + Eigen::Vector3d(0.05, 0.05, 0);
+  const IkResult a = solvePointIk(m, q0, m.bodyIndex("l_foot"), local, footTarget);
+  const PlantedIkResult b = solvePlantedIk(m, q0, chain, {m.bodyIndex("l_foot"), local, footTarget}, {});
+  EXPECT_EQ(a.q, b.q);
 }
 
 INSTANTIATE_TEST_SUITE_P(Characters, InverseKinematics,

@@ -75,6 +75,44 @@ bool openLuxo(MainWindow& w, std::optional<QSize> size = std::nullopt) {
   return openScene(w, ":/scenes/luxo_jump.json", size);
 }
 
+// Where a press on the centre of `body`'s solid lands: the pixel, the hit, and the hit point in
+// the body's frame at the pose on show.
+struct BodyGrab {
+  QPointF pixel;
+  glm::vec3 point{0.0f};
+  Eigen::Vector3d local = Eigen::Vector3d::Zero();
+  bool ok = false;
+};
+BodyGrab grabBody(MainWindow& w, const std::string& body) {
+  BodyGrab g;
+  glm::vec3 centre(0.0f);
+  for (const Solid& s : w.viewport()->renderScene().solids)
+    if (s.body == body && !s.ghost) centre = glm::vec3(s.transform[3]);
+  g.pixel = w.viewport()->toPixel(centre);
+  glm::vec3 o, dir;
+  w.viewport()->camera().ray(g.pixel.x(), g.pixel.y(), static_cast<float>(w.viewport()->width()),
+                             static_cast<float>(w.viewport()->height()), &o, &dir);
+  const std::optional<Pick> hit = pickSolid(w.viewport()->renderScene(), o, dir);
+  if (!hit || w.viewport()->renderScene().solids[hit->solid].body != body) return g;
+  const Model<double>& model = w.document()->models()[0];
+  g.point = hit->point;
+  g.local = worldToBody(model, w.document()->posesNow()[0], model.bodyIndex(body),
+                        Eigen::Vector3d(hit->point.x, hit->point.y, hit->point.z));
+  g.ok = true;
+  return g;
+}
+
+// A Shift+drag in the viewport from p0 to p1 in eight moves.
+void shiftDrag(MainWindow& w, QPointF p0, QPoint p1) {
+  QTest::mousePress(w.viewport(), Qt::LeftButton, Qt::ShiftModifier, p0.toPoint());
+  for (int k = 1; k <= 8; ++k) {
+    const QPointF p = p0 + (QPointF(p1) - p0) * k / 8.0;
+    QMouseEvent move(QEvent::MouseMove, p, w.viewport()->mapToGlobal(p), Qt::NoButton, Qt::LeftButton, Qt::ShiftModifier);
+    QApplication::sendEvent(w.viewport(), &move);
+  }
+  QTest::mouseRelease(w.viewport(), Qt::LeftButton, Qt::ShiftModifier, p1);
+}
+
 // Opens the particle and solves it to the end.
 bool solvedParticle(MainWindow& w) {
   if (!openScene(w, ":/scenes/particle.json")) return false;
@@ -1383,33 +1421,23 @@ class EditorTest : public QObject {
     const Model<double>& model = doc.models()[0];
     const Eigen::VectorXd before = doc.posesNow()[0];
     const int head = model.bodyIndex("head");
-    glm::vec3 centre(0.0f);
-    for (const Solid& s : w.viewport()->renderScene().solids)
-      if (s.body == "head" && !s.ghost) centre = glm::vec3(s.transform[3]);
-    const QPointF p0 = w.viewport()->toPixel(centre);
     // Where the press hits the head, and the plane the point then moves in.
+    const BodyGrab grab = grabBody(w, "head");
+    QVERIFY(grab.ok);
+    const QPointF p0 = grab.pixel;
+    const Eigen::Vector3d local = grab.local;
     const float width = static_cast<float>(w.viewport()->width()), height = static_cast<float>(w.viewport()->height());
     glm::vec3 o, dir;
-    w.viewport()->camera().ray(p0.x(), p0.y(), width, height, &o, &dir);
-    const std::optional<Pick> hit = pickSolid(w.viewport()->renderScene(), o, dir);
-    QVERIFY(hit && w.viewport()->renderScene().solids[hit->solid].body == "head");
-    const Eigen::Vector3d local = worldToBody(model, before, head, Eigen::Vector3d(hit->point.x, hit->point.y, hit->point.z));
     const glm::vec3 normal = glm::normalize(w.viewport()->camera().eye() - w.viewport()->camera().target);
     const QPoint p1 = (p0 + QPointF(-40, 25)).toPoint();
-    QTest::mousePress(w.viewport(), Qt::LeftButton, Qt::ShiftModifier, p0.toPoint());
-    for (int k = 1; k <= 8; ++k) {
-      const QPointF p = p0 + (QPointF(p1) - p0) * k / 8.0;
-      QMouseEvent move(QEvent::MouseMove, p, w.viewport()->mapToGlobal(p), Qt::NoButton, Qt::LeftButton, Qt::ShiftModifier);
-      QApplication::sendEvent(w.viewport(), &move);
-    }
-    QTest::mouseRelease(w.viewport(), Qt::LeftButton, Qt::ShiftModifier, p1);
+    shiftDrag(w, p0, p1);
     QVERIFY(doc.posed());
     const Eigen::VectorXd posed = doc.posed()->q;
     // On screen the grabbed point is under the mouse. (In space it is within 2 mm of the mouse's
     // ray in that plane: a planar lamp's point moves in its own plane, which the camera, looking
     // slightly down, does not face exactly.)
     w.viewport()->camera().ray(p1.x(), p1.y(), width, height, &o, &dir);
-    const glm::vec3 target = o + dir * (glm::dot(hit->point - o, normal) / glm::dot(dir, normal));
+    const glm::vec3 target = o + dir * (glm::dot(grab.point - o, normal) / glm::dot(dir, normal));
     const Eigen::Vector3d reached = bodyToWorld(model, posed, head, local);
     const QPointF shown = w.viewport()->toPixel(glm::vec3(reached.x(), reached.y(), reached.z()));
     QVERIFY2(std::hypot(shown.x() - p1.x(), shown.y() - p1.y()) < 1.0,
@@ -1417,6 +1445,52 @@ class EditorTest : public QObject {
     QVERIFY((reached - Eigen::Vector3d(target.x, target.y, target.z)).norm() < 2e-3);
     for (const char* root : {"base_x", "base_y", "base_rz"}) QCOMPARE(posed[model.dofIndex(root)], before[model.dofIndex(root)]);
     QVERIFY((posed - before).cwiseAbs().maxCoeff() > 0.05);
+  }
+
+  // Shift+drag on a character standing on the ground: its contacts' points at this time stay
+  // planted, every joint moves and the root translates. Pulling the biped's pelvis down crouches
+  // it on its soles: the pelvis point follows the mouse, the soles' four points do not move.
+  void shiftDragOnAStandingBipedCrouchesItOnItsFeet() {
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/biped_jump.json", QSize(1200, 800)));
+    w.viewport()->frameAll();
+    Document& doc = *w.document();
+    QCOMPARE(doc.currentTime(), 0.0);  // both feet on the ground
+    w.findChild<QAction*>("poseTool")->trigger();
+    const Model<double>& model = doc.models()[0];
+    // Unsolved, the editor shows the rest pose (straight legs: no crouch to first order); the
+    // start key is the standing pose.
+    Eigen::VectorXd key = Eigen::VectorXd::Zero(model.dofCount());
+    for (const TermSpec& t : doc.scene().terms)
+      if (t.id == "start_pose")
+        for (const auto& [dof, value] : t.values) key[model.dofIndex(dof)] = value;
+    doc.setPosed(0, key);
+    const Eigen::VectorXd before = doc.posesNow()[0];
+    QCOMPARE(before, key);
+    const int pelvis = model.bodyIndex("pelvis");
+    auto soles = [&](const Eigen::VectorXd& q) {
+      std::vector<Eigen::Vector3d> out;
+      for (const char* foot : {"l_foot", "r_foot"})
+        for (const double x : {-0.06, 0.16}) out.push_back(bodyToWorld(model, q, model.bodyIndex(foot), Eigen::Vector3d(x, -0.05, 0)));
+      return out;
+    };
+    const BodyGrab grab = grabBody(w, "pelvis");
+    QVERIFY(grab.ok);
+    const QPointF p0 = grab.pixel;
+    const Eigen::Vector3d local = grab.local;
+    const QPoint p1 = (p0 + QPointF(0, 30)).toPoint();
+    shiftDrag(w, p0, p1);
+    QVERIFY(doc.posed());
+    const Eigen::VectorXd posed = doc.posed()->q;
+    const Eigen::Vector3d reached = bodyToWorld(model, posed, pelvis, local);
+    const QPointF shown = w.viewport()->toPixel(glm::vec3(reached.x(), reached.y(), reached.z()));
+    QVERIFY2(std::hypot(shown.x() - p1.x(), shown.y() - p1.y()) < 1.0,
+             qPrintable(QString("%1 %2").arg(shown.x() - p1.x()).arg(shown.y() - p1.y())));
+    QVERIFY2(posed[model.dofIndex("pelvis_y")] < before[model.dofIndex("pelvis_y")] - 0.01,
+             qPrintable(QString::number(posed[model.dofIndex("pelvis_y")] - before[model.dofIndex("pelvis_y")])));
+    QCOMPARE(posed[model.dofIndex("pelvis_rz")], before[model.dofIndex("pelvis_rz")]);  // moved straight down
+    const std::vector<Eigen::Vector3d> a = soles(before), b = soles(posed);
+    for (size_t i = 0; i < a.size(); ++i) QVERIFY2((a[i] - b[i]).norm() < 1e-6, qPrintable(QString::number((a[i] - b[i]).norm())));
   }
 
   // A contact's points from the viewport: the form's "Add by clicking the body", then a click on

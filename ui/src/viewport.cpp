@@ -349,12 +349,31 @@ bool Viewport::startPose(const QPointF& pos, bool ik) {
   const int body = model.bodyIndex(s.body);
   doc_->selectBody(s.character, s.body);
   if (ik) {
-    // The grabbed point follows the mouse in the plane facing the camera; the chain up to the
-    // root turns to take it there.
-    if (ikChain(model, body).empty()) return false;
+    // The grabbed point follows the mouse in the plane facing the camera. With points of the
+    // character on the ground now (its contacts at this time, on other bodies than the grabbed
+    // one), every joint moves and the root translates, and those points stay planted: pulling a
+    // biped's pelvis down crouches it on its feet. Otherwise the chain up to the root turns.
     const Eigen::Vector3d hit(pick->point.x, pick->point.y, pick->point.z);
+    IkDrag drag{s.character, body, worldToBody(model, q, body, hit), {}, {}};
+    const Scene& scene = doc_->scene();
+    Data<double> d(model);
+    forwardKinematics(model, d, q.data());
+    for (const TermSpec& t : scene.terms) {
+      const double now = doc_->currentTime();
+      if (!t.enabled || t.kind != TermKind::Contact || t.character != scene.characters[s.character].id ||
+          now < t.start - 1e-9 || now > t.end + 1e-9 || model.bodyIndex(t.body) == body)
+        continue;
+      for (const Eigen::Vector3d& p : t.points)
+        drag.planted.push_back({model.bodyIndex(t.body), p, pointPosition(d, model.bodyIndex(t.body), p)});
+    }
+    if (drag.planted.empty()) {
+      drag.dofs = ikChain(model, body);
+    } else {
+      drag.dofs = plantedIkDofs(model);
+    }
+    if (drag.dofs.empty()) return false;
     drag_ = Drag::PoseIk;
-    ik_ = {s.character, body, worldToBody(model, q, body, hit)};
+    ik_ = std::move(drag);
     dragPlanePoint_ = pick->point;
     dragPlaneNormal_ = glm::normalize(camera_.eye() - camera_.target);
     return true;
@@ -387,7 +406,8 @@ void Viewport::dragIk(const QPointF& pos) {
   const glm::vec3 p = *at;
   const Model<double>& model = doc_->models()[ik_.character];
   // From the pose on show, so the chain moves on from where it is (no jumps between branches).
-  const IkResult r = solvePointIk(model, doc_->posesNow()[ik_.character], ik_.body, ik_.local, Eigen::Vector3d(p.x, p.y, p.z));
+  const PlantedIkResult r = solvePlantedIk(model, doc_->posesNow()[ik_.character], ik_.dofs,
+                                           {ik_.body, ik_.local, Eigen::Vector3d(p.x, p.y, p.z)}, ik_.planted);
   doc_->setPosed(ik_.character, r.q);
 }
 
