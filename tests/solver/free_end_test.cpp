@@ -202,8 +202,9 @@ TEST(FreeEnd, AnotherLampLiftingOffAtTheWindowsEndStaysPhysical) {
   const ValidityReport v = checkValidity(*problem);
   ASSERT_EQ(v.flights.size(), 2u);
   for (const ValidityCheck& c : validityChecklist(v))
-    if (c.name.find("bodies above the ground") == std::string::npos)  // left out above
+    if (c.name.find("bodies above the ground") == std::string::npos) {  // left out above
       EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " " << c.unit << " (limit " << c.limit << ")";
+    }
 }
 
 }  // namespace
