@@ -99,9 +99,9 @@ PlantedIkResult solvePlantedIk(const Model<double>& model, const Eigen::VectorXd
       Eigen::VectorXd base = Eigen::VectorXd::Zero(n);
       Eigen::MatrixXd N = Eigen::MatrixXd::Identity(n, n);
       if (k) {
+        // J_h^+ = J_h^T (J_h J_h^T + 1e-12 I)^-1, the transpose of a solve with the symmetric matrix.
         const Eigen::MatrixXd pinv =
-            Jh.transpose() * (Jh * Jh.transpose() + 1e-12 * Eigen::MatrixXd::Identity(3 * k, 3 * k)).ldlt().solve(
-                                 Eigen::MatrixXd::Identity(3 * k, 3 * k));
+            (Jh * Jh.transpose() + 1e-12 * Eigen::MatrixXd::Identity(3 * k, 3 * k)).ldlt().solve(Jh).transpose();
         base = pinv * eh;
         N -= pinv * Jh;
       }

@@ -356,21 +356,18 @@ bool Viewport::startPose(const QPointF& pos, bool ik) {
     const Eigen::Vector3d hit(pick->point.x, pick->point.y, pick->point.z);
     IkDrag drag{s.character, body, worldToBody(model, q, body, hit), {}, {}};
     const Scene& scene = doc_->scene();
+    const double now = doc_->currentTime();
     Data<double> d(model);
     forwardKinematics(model, d, q.data());
     for (const TermSpec& t : scene.terms) {
-      const double now = doc_->currentTime();
       if (!t.enabled || t.kind != TermKind::Contact || t.character != scene.characters[s.character].id ||
-          now < t.start - 1e-9 || now > t.end + 1e-9 || model.bodyIndex(t.body) == body)
+          now < t.start - 1e-9 || now > t.end + 1e-9)
         continue;
-      for (const Eigen::Vector3d& p : t.points)
-        drag.planted.push_back({model.bodyIndex(t.body), p, pointPosition(d, model.bodyIndex(t.body), p)});
+      const int on = model.bodyIndex(t.body);
+      if (on == body) continue;
+      for (const Eigen::Vector3d& p : t.points) drag.planted.push_back({on, p, pointPosition(d, on, p)});
     }
-    if (drag.planted.empty()) {
-      drag.dofs = ikChain(model, body);
-    } else {
-      drag.dofs = plantedIkDofs(model);
-    }
+    drag.dofs = drag.planted.empty() ? ikChain(model, body) : plantedIkDofs(model);
     if (drag.dofs.empty()) return false;
     drag_ = Drag::PoseIk;
     ik_ = std::move(drag);

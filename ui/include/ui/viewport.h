@@ -131,7 +131,7 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   struct IkDrag {  // the grabbed point moves in the drag plane
     int character = -1, body = -1;
     Eigen::Vector3d local = Eigen::Vector3d::Zero();  // the grabbed point, in the body's frame
-    std::vector<int> dofs;         // the dofs that move: the chain up to the root, or all of them
+    std::vector<int> dofs;         // the dofs that move: the chain up to the root, or plantedIkDofs
     std::vector<IkPoint> planted;  // contact points on the ground now, held where they are
   } ik_;
   struct PoseDrag {
