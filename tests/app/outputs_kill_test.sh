@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # A run's outputs are all or nothing: spacetime-cli runs are killed (SIGKILL) at random moments
-# while they solve and write over a previous result, alternating two scenes. After every kill
+# while they solve and write over a previous result, alternating two scenes; half of the kills
+# fall in the write phase (within 60 ms of the new set's directory appearing). After every kill
 # the output directory holds one complete set - the old or the new, never a mix - and no
 # temporary; the temporaries a killed run left beside it are gone after the next run.
+# Usage: outputs_kill_test.sh CLI SCENES_DIR LADDER_DIR [RUNS] (ctest: 12 runs; the issue's
+# audit: 40).
 set -u
 cli="$1"
 scenes="$2"
 ladder="$3"
+runs="${4:-12}"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
@@ -31,12 +35,19 @@ sigB=$(signature "$tmp/refB")
 
 cp -r "$tmp/refA" "$tmp/out"
 changed=0
-for i in $(seq 1 12); do
+for i in $(seq 1 "$runs"); do
   if [ $((i % 2)) -eq 1 ]; then scene="$B"; else scene="$A"; fi
   before=$(signature "$tmp/out")
   "$cli" solve "$scene" --out "$tmp/out" --threads 1 --quiet 2>/dev/null &
   pid=$!
-  sleep "$(python3 -c "import random; print(round(random.uniform(0.2, 2.5), 3))")"
+  if [ $((i % 4)) -lt 2 ]; then
+    # Anywhere in the run: mostly while it solves.
+    sleep "$(python3 -c "import random; print(round(random.uniform(0.2, 2.5), 3))")"
+  else
+    # In the write phase: within 60 ms of the new set's directory appearing beside --out.
+    while [ ! -e "$tmp/.out.new-$pid" ] && kill -0 "$pid" 2>/dev/null; do sleep 0.002; done
+    sleep "$(python3 -c "import random; print(round(random.uniform(0, 0.06), 4))")"
+  fi
   kill -9 "$pid" 2>/dev/null
   wait "$pid" 2>/dev/null
   after=$(signature "$tmp/out")
@@ -44,7 +55,7 @@ for i in $(seq 1 12); do
   [ "$after" = "$before" ] || changed=$((changed + 1))
   ! ls -A "$tmp/out" | grep -q tmp || fail "run $i left a temporary inside the directory: $(ls -A "$tmp/out")"
 done
-echo "12 runs killed at random moments: $changed replaced the set, $((12 - changed)) left the old one"
+echo "$runs runs killed at random moments: $changed replaced the set, $((runs - changed)) left the old one"
 
 "$cli" solve "$A" --out "$tmp/out" --threads 1 --quiet 2>/dev/null || fail "the final run exited $?"
 [ "$(signature "$tmp/out")" = "$sigA" ] || fail "the final run's set is wrong"
