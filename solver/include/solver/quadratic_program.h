@@ -1,0 +1,59 @@
+// A sparse convex quadratic program solved by a primal-dual interior point:
+//     min 1/2 x^T H x + g^T x   subject to   A x = b,   C x <= d.
+//
+// This is the subproblem of the SQP-type methods the solver issue asks for: a step of Cohen's
+// SQP and both halves of Witkin & Kass's projected Newton method (the restoration onto the
+// constraints and the tangent step) are such programs, with the spacetime problem's linearised
+// rows as A and C. The inequalities (contact pushes and cones, clearances, limits: thousands of
+// rows of which a few dozen are active) are handled as inequalities, which the damped
+// least-squares restoration measured in docs/design.md could not do.
+//
+// Method: Mehrotra's predictor-corrector (Nocedal & Wright, Numerical Optimization, 2nd ed.,
+// Algorithm 16.4, with equality rows), slacks s = d - C x >= 0 and multipliers z >= 0. Each
+// iteration eliminates the slacks and the inequality multipliers and solves the quasi-definite
+// system (Vanderbei 1995)
+//     [ H + C^T (Z/S) C + dx I    A^T  ] [ dx ]   [ -r_d - C^T S^-1 (Z r_i - r_c) ]
+//     [ A                        -dy I ] [ dy ] = [ -r_e                          ]
+// by a sparse LDL^T whose pattern is analysed once (the band of H, C^T C and A^T A). H only
+// needs to be convex on the feasible directions; where the factorisation shows it is not (more
+// than |A| negative pivots, Sylvester's law of inertia) a multiple of the identity is added to
+// H for the rest of the solve and reported, as the inertia correction of Waechter & Biegler
+// (2006, section 3.1) does for a Newton step.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <string>
+
+namespace spacetime {
+
+struct QuadraticProgram {
+  Eigen::SparseMatrix<double> hessian;  // H (n x n): the lower triangle is read
+  Eigen::VectorXd gradient;             // g
+  Eigen::SparseMatrix<double, Eigen::RowMajor> equalities;    // A (m_e x n)
+  Eigen::VectorXd equalityTargets;                            // b
+  Eigen::SparseMatrix<double, Eigen::RowMajor> inequalities;  // C (m_i x n)
+  Eigen::VectorXd inequalityBounds;                           // d
+};
+
+struct QpOptions {
+  double tolerance = 1e-9;  // residuals relative to 1 + the data's size, and the mean complementarity
+  int maxIterations = 80;
+  // Regularisation of the two diagonal blocks: keeps the system quasi-definite with redundant
+  // equality rows (contacts whose rows repeat each other) and a singular H.
+  double primalRegularisation = 1e-10, dualRegularisation = 1e-9;
+};
+
+struct QpResult {
+  bool converged = false;
+  Eigen::VectorXd x, y, z;  // the point, the equalities' and the inequalities' (z >= 0) multipliers
+  int iterations = 0;
+  double shift = 0;  // multiple of the identity added to H (0 when H was convex enough)
+  double primalResidual = 0, dualResidual = 0, complementarity = 0;  // at x, unscaled, inf-norms
+  std::string reason;
+};
+
+// Never throws; a program with no feasible point or no bounded minimum ends not converged
+// with the reason (the residuals that stopped falling).
+QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& options = {});
+
+}  // namespace spacetime

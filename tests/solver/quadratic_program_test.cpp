@@ -1,0 +1,180 @@
+// The interior-point quadratic program solver against independent truths: the Euclidean
+// projection onto the probability simplex (the sort-and-threshold algorithm of Duchi et al.,
+// ICML 2008) and, for small random programs, the minimum over every choice of active
+// inequalities of the equality-constrained program's solution (a dense KKT solve each),
+// keeping the feasible ones whose multipliers push. Also: a concave H gets the inertia
+// correction, redundant equality rows still solve, and a program with no feasible point ends
+// not converged with a reason rather than a wrong answer.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <functional>
+#include <limits>
+#include <random>
+
+#include "solver/quadratic_program.h"
+
+namespace spacetime {
+namespace {
+
+using Vec = Eigen::VectorXd;
+using Mat = Eigen::MatrixXd;
+using SpRow = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+QuadraticProgram program(const Mat& H, const Vec& g, const Mat& A, const Vec& b, const Mat& C, const Vec& d) {
+  QuadraticProgram qp;
+  qp.hessian = H.sparseView();
+  qp.gradient = g;
+  qp.equalities = SpRow(A.sparseView());
+  qp.equalityTargets = b;
+  qp.inequalities = SpRow(C.sparseView());
+  qp.inequalityBounds = d;
+  return qp;
+}
+
+// Duchi et al. 2008, Figure 1: the projection of p onto {x >= 0, sum x = 1}.
+Vec simplexProjection(const Vec& p) {
+  std::vector<double> u(p.data(), p.data() + p.size());
+  std::sort(u.rbegin(), u.rend());
+  double sum = 0, theta = 0;
+  for (size_t j = 0; j < u.size(); ++j) {
+    sum += u[j];
+    const double t = (sum - 1) / static_cast<double>(j + 1);
+    if (u[j] - t > 0) theta = t;
+  }
+  return (p.array() - theta).cwiseMax(0.0);
+}
+
+TEST(QuadraticProgram, ProjectsOntoTheSimplexAsTheSortingAlgorithmDoes) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0, 1);
+  const int n = 60;
+  Vec p(n);
+  for (int i = 0; i < n; ++i) p[i] = 0.3 * normal(rng);
+  // min 1/2 |x - p|^2 = 1/2 x.x - p.x + const, sum x = 1, -x <= 0.
+  const QuadraticProgram qp = program(Mat::Identity(n, n), -p, Mat::Ones(1, n), Vec::Ones(1), -Mat::Identity(n, n), Vec::Zero(n));
+  // A bound whose multiplier is nearly zero sits at x = mu / z: at the default tolerance (mean
+  // complementarity 1e-9) one coordinate was 1.3e-6 off; at 1e-12, 1e-13.
+  QpOptions options;
+  options.tolerance = 1e-12;
+  const QpResult r = solveQuadraticProgram(qp, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  const Vec truth = simplexProjection(p);
+  EXPECT_LT((r.x - truth).lpNorm<Eigen::Infinity>(), 1e-10);
+  EXPECT_GT((truth.array() == 0).count(), 10);  // many bounds active: a real test of the inequalities
+  EXPECT_EQ(r.shift, 0.0);
+  EXPECT_LT(r.iterations, 30);
+}
+
+// The minimiser by enumeration: for every subset of inequalities held as equalities, the KKT
+// point of the equality-constrained program; the feasible one with pushing multipliers and the
+// lowest objective.
+Vec enumeratedMinimiser(const Mat& H, const Vec& g, const Mat& A, const Vec& b, const Mat& C, const Vec& d) {
+  const int n = static_cast<int>(g.size()), me = static_cast<int>(A.rows()), mi = static_cast<int>(C.rows());
+  double best = std::numeric_limits<double>::infinity();
+  Vec bestX;
+  for (int mask = 0; mask < (1 << mi); ++mask) {
+    std::vector<int> active;
+    for (int i = 0; i < mi; ++i)
+      if (mask & (1 << i)) active.push_back(i);
+    const int m = me + static_cast<int>(active.size());
+    if (m > n) continue;
+    Mat K = Mat::Zero(n + m, n + m);
+    Vec rhs(n + m);
+    K.topLeftCorner(n, n) = H;
+    rhs.head(n) = -g;
+    for (int i = 0; i < me; ++i) {
+      K.block(n + i, 0, 1, n) = A.row(i);
+      rhs[n + i] = b[i];
+    }
+    for (size_t k = 0; k < active.size(); ++k) {
+      K.block(n + me + k, 0, 1, n) = C.row(active[k]);
+      rhs[n + me + k] = d[active[k]];
+    }
+    K.topRightCorner(n, m) = K.bottomLeftCorner(m, n).transpose();
+    Eigen::FullPivLU<Mat> lu(K);
+    if (lu.rank() < n + m) continue;
+    const Vec sol = lu.solve(rhs);
+    const Vec x = sol.head(n);
+    if (((C * x - d).array() > 1e-9).any()) continue;
+    // The solve gives H x + A^T y + C_A^T z = -g: the Lagrange multipliers of
+    // f + y.(A x - b) + z.(C x - d), so an active inequality pushes when its z >= 0.
+    bool pushes = true;
+    for (size_t k = 0; k < active.size(); ++k) pushes = pushes && sol[n + me + static_cast<int>(k)] >= -1e-9;
+    if (!pushes) continue;
+    const double f = 0.5 * x.dot(H * x) + g.dot(x);
+    if (f < best) {
+      best = f;
+      bestX = x;
+    }
+  }
+  return bestX;
+}
+
+TEST(QuadraticProgram, MatchesEnumerationOfActiveSetsOnRandomPrograms) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0, 1);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  auto random = [&](int r, int c) {
+    Mat M(r, c);
+    for (int i = 0; i < r; ++i)
+      for (int j = 0; j < c; ++j) M(i, j) = normal(rng);
+    return M;
+  };
+  int withActiveRows = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 5, me = trial % 3, mi = 8;
+    const Mat M = random(n, n);
+    const Mat H = M.transpose() * M + 0.05 * Mat::Identity(n, n);
+    const Vec g = 3 * random(n, 1);
+    const Mat A = random(me, n), C = random(mi, n);
+    const Vec feasible = random(n, 1);
+    const Vec b = A * feasible;
+    Vec d = C * feasible;
+    for (int i = 0; i < mi; ++i) d[i] += uniform(rng);
+    const Vec truth = enumeratedMinimiser(H, g, A, b, C, d);
+    ASSERT_EQ(truth.size(), n) << "trial " << trial;
+    const QpResult r = solveQuadraticProgram(program(H, g, A, b, C, d));
+    ASSERT_TRUE(r.converged) << "trial " << trial << ": " << r.reason;
+    EXPECT_LT((r.x - truth).lpNorm<Eigen::Infinity>(), 1e-6) << "trial " << trial;
+    EXPECT_GE(r.z.minCoeff(), 0.0);
+    if (((C * truth - d).array() > -1e-9).any()) ++withActiveRows;
+  }
+  EXPECT_GT(withActiveRows, 20);
+}
+
+TEST(QuadraticProgram, ConcaveHessianGetsTheInertiaCorrection) {
+  // min -1/2 |x|^2 on the box |x_i| <= 1: H is not convex; the solver adds a shift until the
+  // system has the inertia of a convex program and solves that program.
+  const int n = 3;
+  const Mat C = (Mat(2 * n, n) << Mat::Identity(n, n), -Mat::Identity(n, n)).finished();
+  const QpResult r = solveQuadraticProgram(
+      program(-Mat::Identity(n, n), Vec::Constant(n, 0.1), Mat::Zero(0, n), Vec::Zero(0), C, Vec::Ones(2 * n)));
+  EXPECT_GE(r.shift, 1.0);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_LE((C * r.x).maxCoeff(), 1 + 1e-8);
+}
+
+TEST(QuadraticProgram, RedundantEqualityRowsStillSolve) {
+  // The same row twice (as two contacts' rows can repeat each other): min |x|^2/2, x0 + x1 = 2.
+  const Mat A = (Mat(2, 2) << 1, 1, 1, 1).finished();
+  const QpResult r = solveQuadraticProgram(
+      program(Mat::Identity(2, 2), Vec::Zero(2), A, Vec::Constant(2, 2.0), Mat::Zero(0, 2), Vec::Zero(0)));
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_NEAR(r.x[0], 1.0, 1e-7);
+  EXPECT_NEAR(r.x[1], 1.0, 1e-7);
+}
+
+TEST(QuadraticProgram, InfeasibleProgramEndsNotConvergedWithAReason) {
+  // x <= -1 and -x <= -1 (x >= 1).
+  const Mat C = (Mat(2, 1) << 1, -1).finished();
+  const QpResult r = solveQuadraticProgram(
+      program(Mat::Identity(1, 1), Vec::Zero(1), Mat::Zero(0, 1), Vec::Zero(0), C, Vec::Constant(2, -1.0)));
+  EXPECT_FALSE(r.converged);
+  EXPECT_FALSE(r.reason.empty());
+  EXPECT_TRUE(r.x.allFinite());
+}
+
+}  // namespace
+}  // namespace spacetime

@@ -1,0 +1,50 @@
+// Feasibility restoration with the inequalities held as inequalities (solver/restoration.h) on
+// the shipped jump: from an augmented-Lagrangian iterate stopped after five multiplier updates
+// (largest row 1e-3: the landing impact, the head and heel clearances), at most three steps of
+// the restoration program (measured: two) reach a violation below 1e-6 without pushing any
+// inequality over its bound, and the motion stays near the optimum (the objective moves by less
+// than 1 %). The
+// damped least-squares restoration without the inequalities reached at best 5.7e-4 from such a
+// point (docs/design.md).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "../shipped_scene.h"
+#include "solver/augmented_lagrangian.h"
+#include "solver/restoration.h"
+
+namespace spacetime {
+namespace {
+
+TEST(Restoration, BringsTheJumpFromAnEarlyIterateOntoItsConstraints) {
+  std::string error;
+  const std::unique_ptr<SpacetimeProblem> problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  SolverOptions options;
+  options.maxOuterIterations = 5;
+  options.maxProjectionIterations = 0;  // the augmented Lagrangian's own projection would restore it
+  options.newtonPolish = false;
+  options.coldNewtonSteps = 0;
+  const SolverSummary early = solveSpacetime(*problem, options);
+  ASSERT_FALSE(early.converged);
+  ASSERT_GT(early.maxViolation, 1e-4);
+  ASSERT_LT(early.maxViolation, 1e-2);
+
+  double violation = early.maxViolation;
+  for (int k = 0; k < 3 && violation >= 1e-6; ++k) {
+    const RestorationStep step = restorationStep(*problem, 1e-9);
+    ASSERT_TRUE(step.taken) << step.reason;
+    std::printf("restoration step %d: violation %.3g -> %.3g, %d interior-point iterations, %.1f ms (%.1f ms the program)\n",
+                k + 1, step.violationBefore, step.violationAfter, step.qpIterations, 1e3 * step.seconds,
+                1e3 * step.qpSeconds);
+    violation = step.violationAfter;
+  }
+  const ProblemMeasures after = measure(*problem);
+  EXPECT_LT(violation, 1e-6);
+  EXPECT_NEAR(after.maxViolation, violation, 1e-12);
+  EXPECT_NEAR(after.objective, early.objective, 0.01 * early.objective);
+}
+
+}  // namespace
+}  // namespace spacetime
