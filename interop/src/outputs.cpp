@@ -46,6 +46,7 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["iterations"] = s.iterations;
   j["outer_iterations"] = s.outerIterations;
   j["newton_steps"] = s.newtonSteps;
+  j["restoration_steps"] = s.restorationSteps;
   j["polished"] = s.polished;
   j["solve_seconds"] = s.solveSeconds;
   j["jacobian_seconds"] = s.jacobianSeconds;

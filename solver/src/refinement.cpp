@@ -92,6 +92,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.iterations += summary.iterations;
     total.outerIterations += summary.outerIterations;
     total.newtonSteps += summary.newtonSteps;
+    total.restorationSteps += summary.restorationSteps;
     total.jacobianSeconds += summary.jacobianSeconds;
     total.linearSolverSeconds += summary.linearSolverSeconds;
     const std::string failure = describe(attempt, checks);
@@ -132,6 +133,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.iterations = total.iterations;
   best.summary.outerIterations = total.outerIterations;
   best.summary.newtonSteps = total.newtonSteps;
+  best.summary.restorationSteps = total.restorationSteps;
   best.summary.jacobianSeconds = total.jacobianSeconds;
   best.summary.linearSolverSeconds = total.linearSolverSeconds;
   best.summary.solveSeconds = std::chrono::duration<double>(Clock::now() - start).count();

@@ -1,8 +1,9 @@
-// One restoration step (see restoration.h).
+// Feasibility restoration (see restoration.h).
 #include "solver/restoration.h"
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "raw_rows.h"
 #include "solver/quadratic_program.h"
@@ -20,18 +21,50 @@ using raw::Vec;
 
 namespace {
 
-double largestViolation(const RawEvaluator& evaluator, const Vec& values) {
-  double worst = 0;
-  for (int r = 0; r < evaluator.rows(); ++r) {
-    if (evaluator.kind(r) == RowKind::Equality) worst = std::max(worst, std::abs(values[r]));
-    if (evaluator.kind(r) == RowKind::Inequality) worst = std::max(worst, values[r]);
-  }
-  return worst;
-}
+// Rows this close to their bound (or past it) are elastic when the linearised inequalities
+// admit no point.
+constexpr double kElasticMargin = 0.05;
 
 }  // namespace
 
-RestorationStep restorationStep(SpacetimeProblem& problem, double damping, int threads) {
+struct Restoration::State {
+  SpacetimeProblem& problem;
+  Variables vars;
+  RawEvaluator evaluator;
+  std::string error;
+  std::vector<int> equality, inequality;
+  QpWorkspace hard, elastic;  // the two programs' patterns, analysed once
+  std::vector<int> elasticRows;  // indices into `inequality` of the elastic program's rows
+
+  State(SpacetimeProblem& p, int threads)
+      : problem(p), vars(p.ceresProblem()), evaluator(p, vars, std::max(1, threads)) {
+    if (!p.freeEnds().empty() || evaluator.anyMoving()) error = "free contact ends are bounded variables";
+    for (int r = 0; r < evaluator.rows(); ++r) {
+      if (evaluator.kind(r) == RowKind::Equality) equality.push_back(r);
+      if (evaluator.kind(r) == RowKind::Inequality) inequality.push_back(r);
+    }
+  }
+  double violation(const Vec& values) const {
+    double worst = 0;
+    for (int r : equality) worst = std::max(worst, std::abs(values[r]));
+    for (int r : inequality) worst = std::max(worst, values[r]);
+    return worst;
+  }
+  double merit(const Vec& values) const {
+    double m = 0;
+    for (int r : equality) m += values[r] * values[r];
+    for (int r : inequality) m += std::max(0.0, values[r]) * std::max(0.0, values[r]);
+    return 0.5 * m;
+  }
+};
+
+Restoration::Restoration(SpacetimeProblem& problem, int threads) : state_(std::make_unique<State>(problem, threads)) {}
+Restoration::~Restoration() = default;
+bool Restoration::ready() const { return state_->error.empty(); }
+const std::string& Restoration::error() const { return state_->error; }
+
+RestorationStep Restoration::step(double damping) {
+  State& st = *state_;
   const Clock::time_point start = Clock::now();
   RestorationStep step;
   auto finish = [&](const std::string& reason) {
@@ -39,53 +72,169 @@ RestorationStep restorationStep(SpacetimeProblem& problem, double damping, int t
     step.seconds = secondsSince(start);
     return step;
   };
-  if (!problem.freeEnds().empty()) return finish("free contact ends are bounded variables");
-  const Variables vars(problem.ceresProblem());
-  RawEvaluator evaluator(problem, vars, std::max(1, threads));
-  if (evaluator.anyMoving()) return finish("a residual moves with a free contact end");
+  if (!ready()) return finish(st.error);
   RawRows rows;
-  if (!evaluator.evaluate(&rows, true)) return finish("a row is not finite");
-  step.violationBefore = step.violationAfter = largestViolation(evaluator, rows.values);
+  if (!st.evaluator.evaluate(&rows, true)) return finish("a row is not finite");
+  step.violationBefore = step.violationAfter = st.violation(rows.values);
+  step.meritBefore = step.meritAfter = st.merit(rows.values);
 
-  std::vector<int> equality, inequality;
-  for (int r = 0; r < evaluator.rows(); ++r) {
-    if (evaluator.kind(r) == RowKind::Equality) equality.push_back(r);
-    if (evaluator.kind(r) == RowKind::Inequality) inequality.push_back(r);
-  }
-  const int n = vars.tangent;
-  const SpRow Jc = raw::selectRows(rows.jacobian, equality);
-  Vec c(static_cast<Eigen::Index>(equality.size()));
-  for (size_t i = 0; i < equality.size(); ++i) c[static_cast<Eigen::Index>(i)] = rows.values[equality[i]];
-  QuadraticProgram qp;
-  SpMat identity(n, n);
-  identity.setIdentity();
-  qp.hessian = SpMat(SpMat(Jc.transpose()) * Jc) + damping * identity;
-  qp.gradient = Jc.transpose() * c;
-  qp.equalities.resize(0, n);
-  qp.equalityTargets.resize(0);
-  qp.inequalities = raw::selectRows(rows.jacobian, inequality);
-  qp.inequalityBounds.resize(static_cast<Eigen::Index>(inequality.size()));
-  for (size_t i = 0; i < inequality.size(); ++i) qp.inequalityBounds[static_cast<Eigen::Index>(i)] = -rows.values[inequality[i]];
+  const int n = st.vars.tangent;
+  const SpRow Jc = raw::selectRows(rows.jacobian, st.equality);
+  const SpRow Jg = raw::selectRows(rows.jacobian, st.inequality);
+  Vec c(static_cast<Eigen::Index>(st.equality.size())), g(static_cast<Eigen::Index>(st.inequality.size()));
+  for (size_t i = 0; i < st.equality.size(); ++i) c[static_cast<Eigen::Index>(i)] = rows.values[st.equality[i]];
+  for (size_t i = 0; i < st.inequality.size(); ++i) g[static_cast<Eigen::Index>(i)] = rows.values[st.inequality[i]];
+  const SpMat JtJ = SpMat(Jc.transpose()) * Jc;
   // Tight: near a feasible point the step is of the size of the violation, and an inexact
   // interior point leaves rows whose multipliers are nearly zero off by mu / z.
   QpOptions options;
   options.tolerance = 1e-13;
-  const Clock::time_point qpStart = Clock::now();
-  const QpResult result = solveQuadraticProgram(qp, options);
-  step.qpSeconds = secondsSince(qpStart);
-  step.qpIterations = result.iterations;
-  if (!result.converged) return finish("the restoration program was not solved: " + result.reason);
+  options.acceptableTolerance = 1e-9;
+  options.convex = true;
 
-  const std::vector<double> before = vars.save();
-  vars.plus(before, result.x);
+  // The hard program: every linearised inequality held.
+  QuadraticProgram qp;
+  qp.hessian = JtJ;
+  for (int i = 0; i < n; ++i) qp.hessian.coeffRef(i, i) += damping;
+  qp.gradient = Jc.transpose() * c;
+  qp.equalities.resize(0, n);
+  qp.equalityTargets.resize(0);
+  qp.inequalities = Jg;
+  qp.inequalityBounds = -g;
+  // The hard program is a model of the merit only where no inequality is violated now (dx = 0
+  // is then one of its points, so its minimum does not raise the merit); otherwise, or if it has
+  // no point, the elastic program is.
+  Clock::time_point t0 = Clock::now();
+  QpResult result;
+  if (g.size() == 0 || g.maxCoeff() <= 0) {
+    result = solveQuadraticProgram(qp, options, &st.hard);
+    step.qpSeconds += secondsSince(t0);
+    step.qpIterations += result.iterations;
+  }
+  Vec dx;
+  if (result.converged) {
+    dx = result.x;
+    step.meritPredicted = 0.5 * (c + Jc * dx).squaredNorm();
+  } else {
+    // The elastic program: variables [dx; v], rows g_i + J_i dx - v_i <= 0 for the elastic rows,
+    // 1/2 |v|^2 in the objective. Its rows are chosen once, at its first use.
+    if (st.elasticRows.empty())
+      for (size_t i = 0; i < st.inequality.size(); ++i)
+        if (g[static_cast<Eigen::Index>(i)] > -kElasticMargin) st.elasticRows.push_back(static_cast<int>(i));
+    const int k = static_cast<int>(st.elasticRows.size());
+    std::vector<Eigen::Triplet<double>> t;
+    for (int col = 0; col < JtJ.outerSize(); ++col)
+      for (SpMat::InnerIterator e(JtJ, col); e; ++e)
+        t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    for (int i = 0; i < n; ++i) t.emplace_back(i, i, damping);
+    for (int j = 0; j < k; ++j) t.emplace_back(n + j, n + j, 1.0);
+    QuadraticProgram ep;
+    ep.hessian.resize(n + k, n + k);
+    ep.hessian.setFromTriplets(t.begin(), t.end());
+    ep.gradient = Vec::Zero(n + k);
+    ep.gradient.head(n) = qp.gradient;
+    ep.equalities.resize(0, n + k);
+    ep.equalityTargets.resize(0);
+    t.clear();
+    for (int row = 0; row < Jg.outerSize(); ++row)
+      for (SpRow::InnerIterator e(Jg, row); e; ++e) t.emplace_back(row, static_cast<int>(e.col()), e.value());
+    for (int j = 0; j < k; ++j) t.emplace_back(st.elasticRows[j], n + j, -1.0);
+    ep.inequalities.resize(Jg.rows(), n + k);
+    ep.inequalities.setFromTriplets(t.begin(), t.end());
+    ep.inequalityBounds = -g;
+    t0 = Clock::now();
+    result = solveQuadraticProgram(ep, options, &st.elastic);
+    step.qpSeconds += secondsSince(t0);
+    step.qpIterations += result.iterations;
+    if (!result.converged) return finish("the restoration program was not solved: " + result.reason);
+    step.elastic = true;
+    dx = result.x.head(n);
+    step.meritPredicted = 0.5 * (c + Jc * dx).squaredNorm() + 0.5 * (g + Jg * dx).cwiseMax(0.0).squaredNorm();
+  }
+
+  const std::vector<double> before = st.vars.save();
+  st.vars.plus(before, dx);
   RawRows after;
-  if (!evaluator.evaluate(&after, false)) {
-    vars.load(before);
+  if (!st.evaluator.evaluate(&after, false)) {
+    st.vars.load(before);
     return finish("the step leads to rows that are not finite");
   }
   step.taken = true;
-  step.violationAfter = largestViolation(evaluator, after.values);
+  step.violationAfter = st.violation(after.values);
+  step.meritAfter = st.merit(after.values);
   return finish("");
+}
+
+RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps, Clock::time_point deadline) {
+  State& st = *state_;
+  const Clock::time_point start = Clock::now();
+  RestorationResult out;
+  RawRows rows;
+  if (!ready() || !st.evaluator.evaluate(&rows, false)) {
+    out.reason = ready() ? "a row is not finite" : st.error;
+    return out;
+  }
+  out.violation = st.violation(rows.values);
+  out.merit = st.merit(rows.values);
+  // Levenberg-Marquardt's rule: the damping falls after a step that lowers the merit and rises
+  // after one that does not (which is undone).
+  double damping = 1e-6;
+  int sinceProgress = 0;
+  while (out.violation > tolerance) {
+    if (out.steps >= maxSteps || Clock::now() > deadline) {
+      out.reason = "out of steps or time";
+      break;
+    }
+    const std::vector<double> before = st.vars.save();
+    const RestorationStep s = step(damping);
+    ++out.steps;
+    // First-order certificate of a positive minimum: the convex linearised merit, nearly
+    // undamped, has its minimum where the motion is (no direction lowers the violation).
+    if (s.taken && damping <= 1e-6 && s.meritBefore - s.meritPredicted <= 1e-9 * s.meritBefore) {
+      st.vars.load(before);
+      out.outcome = RestorationResult::Outcome::PositiveMinimum;
+      break;
+    }
+    if (s.taken && s.meritAfter < s.meritBefore) {
+      const double decrease = (s.meritBefore - s.meritAfter) / s.meritBefore;
+      out.violation = s.violationAfter;
+      out.merit = s.meritAfter;
+      damping = std::max(1e-12, damping / 3);
+      // A positive minimum: with little damping the steps stop lowering the merit.
+      sinceProgress = decrease < 1e-6 && damping <= 1e-6 ? sinceProgress + 1 : 0;
+      if (sinceProgress >= 3) {
+        out.outcome = RestorationResult::Outcome::PositiveMinimum;
+        break;
+      }
+    } else {
+      if (s.taken) st.vars.load(before);
+      damping *= 10;
+      if (damping > 1e8) {
+        // Even a step as short as the damping allows does not lower the merit: a minimum.
+        out.outcome = RestorationResult::Outcome::PositiveMinimum;
+        break;
+      }
+    }
+  }
+  if (out.violation <= tolerance) out.outcome = RestorationResult::Outcome::Feasible;
+  const std::string steps = std::to_string(out.steps) + (out.steps == 1 ? " step" : " steps");
+  std::ostringstream why;
+  switch (out.outcome) {
+    case RestorationResult::Outcome::Feasible:
+      why << "minimising the violation alone met the constraints (" << out.violation << ") in " << steps;
+      break;
+    case RestorationResult::Outcome::PositiveMinimum:
+      why << "minimising the violation alone ends at a positive minimum: largest row " << out.violation
+          << ", 1/2 |c|^2 = " << out.merit << " after " << steps;
+      break;
+    case RestorationResult::Outcome::Undecided:
+      why << "minimising the violation alone reached a largest row of " << out.violation << " (1/2 |c|^2 = "
+          << out.merit << ") after " << steps << " without settling (" << out.reason << ")";
+      break;
+  }
+  out.reason = why.str();
+  out.seconds = secondsSince(start);
+  return out;
 }
 
 }  // namespace spacetime

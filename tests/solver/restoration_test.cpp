@@ -1,9 +1,9 @@
 // Feasibility restoration with the inequalities held as inequalities (solver/restoration.h) on
 // the shipped jump: from an augmented-Lagrangian iterate stopped after five multiplier updates
 // (largest row 1e-3: the landing impact, the head and heel clearances), at most three steps of
-// the restoration program (measured: two) reach a violation below 1e-6 without pushing any
-// inequality over its bound, and the motion stays near the optimum (the objective moves by less
-// than 1 %). The
+// the restoration program reach a violation below 1e-6 without pushing any inequality over its
+// bound (measured: three, the first with elastic rows since the clearances are violated by
+// 2e-4), and the motion stays near the optimum (the objective moves by less than 1 %). The
 // damped least-squares restoration without the inequalities reached at best 5.7e-4 from such a
 // point (docs/design.md).
 #include <gtest/gtest.h>
@@ -17,23 +17,33 @@
 namespace spacetime {
 namespace {
 
-TEST(Restoration, BringsTheJumpFromAnEarlyIterateOntoItsConstraints) {
+// The shipped jump stopped after five multiplier updates, without the final projection.
+std::unique_ptr<SpacetimeProblem> earlyJump(SolverSummary* early) {
   std::string error;
-  const std::unique_ptr<SpacetimeProblem> problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
-  ASSERT_TRUE(problem) << error;
+  std::unique_ptr<SpacetimeProblem> problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
+  if (!problem) return nullptr;
   SolverOptions options;
   options.maxOuterIterations = 5;
   options.maxProjectionIterations = 0;  // the augmented Lagrangian's own projection would restore it
   options.newtonPolish = false;
   options.coldNewtonSteps = 0;
-  const SolverSummary early = solveSpacetime(*problem, options);
+  *early = solveSpacetime(*problem, options);
+  return problem;
+}
+
+TEST(Restoration, BringsTheJumpFromAnEarlyIterateOntoItsConstraints) {
+  SolverSummary early;
+  const std::unique_ptr<SpacetimeProblem> problem = earlyJump(&early);
+  ASSERT_TRUE(problem);
   ASSERT_FALSE(early.converged);
   ASSERT_GT(early.maxViolation, 1e-4);
   ASSERT_LT(early.maxViolation, 1e-2);
 
+  Restoration restoration(*problem);
+  ASSERT_TRUE(restoration.ready()) << restoration.error();
   double violation = early.maxViolation;
   for (int k = 0; k < 3 && violation >= 1e-6; ++k) {
-    const RestorationStep step = restorationStep(*problem, 1e-9);
+    const RestorationStep step = restoration.step(1e-9);
     ASSERT_TRUE(step.taken) << step.reason;
     std::printf("restoration step %d: violation %.3g -> %.3g, %d interior-point iterations, %.1f ms (%.1f ms the program)\n",
                 k + 1, step.violationBefore, step.violationAfter, step.qpIterations, 1e3 * step.seconds,
@@ -44,6 +54,20 @@ TEST(Restoration, BringsTheJumpFromAnEarlyIterateOntoItsConstraints) {
   EXPECT_LT(violation, 1e-6);
   EXPECT_NEAR(after.maxViolation, violation, 1e-12);
   EXPECT_NEAR(after.objective, early.objective, 0.01 * early.objective);
+}
+
+// The restoration phase a stalled solve runs: from the same early iterate it meets the
+// constraints, so it says they do not conflict, and it keeps every inequality.
+TEST(Restoration, MinimisingTheViolationAloneFindsTheJumpFeasible) {
+  SolverSummary early;
+  const std::unique_ptr<SpacetimeProblem> problem = earlyJump(&early);
+  ASSERT_TRUE(problem);
+  ASSERT_GT(early.maxViolation, 1e-4);
+  Restoration restoration(*problem);
+  const RestorationResult r = restoration.minimiseViolation(1e-7, 20, std::chrono::steady_clock::now() + std::chrono::minutes(2));
+  EXPECT_EQ(r.outcome, RestorationResult::Outcome::Feasible) << r.reason;
+  EXPECT_LE(measure(*problem).maxViolation, 1e-7);
+  std::printf("%s (%.2f s)\n", r.reason.c_str(), r.seconds);
 }
 
 }  // namespace

@@ -109,7 +109,8 @@ TEST(SolverRobustness, InvalidOptionsAreReported) {
 
 // Two pins at one instant in two places cannot both hold. The solve stops at the stall, long
 // before its update limit, and names exactly the two pins: at the final projection's least-squares
-// point each is off by half their distance, and every other constraint holds.
+// point each is off by half their distance, and every other constraint holds. The restoration
+// phase certifies the conflict: minimising the violation alone ends at a positive minimum.
 TEST(SolverRobustness, ContradictoryPinsStopAndAreNamed) {
   Scene scene;
   auto unused = load("particle.json", &scene);
@@ -139,6 +140,9 @@ TEST(SolverRobustness, ContradictoryPinsStopAndAreNamed) {
   EXPECT_NE(labels[1].find("'" + scene.terms[1].id + "'"), std::string::npos) << labels[1];
   EXPECT_NEAR(s.maxViolation, half, 1e-6 * half);
   EXPECT_NE(s.reason.find("'clash'"), std::string::npos) << s.reason;
+  EXPECT_NE(s.reason.find("they conflict (minimising the violation alone ends at a positive minimum"), std::string::npos)
+      << s.reason;
+  EXPECT_GE(s.restorationSteps, 1);
   std::printf("%d multiplier updates: %s\n", s.outerIterations, s.reason.c_str());
 }
 

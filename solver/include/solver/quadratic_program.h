@@ -22,6 +22,7 @@
 #pragma once
 
 #include <Eigen/SparseCore>
+#include <memory>
 #include <string>
 
 namespace spacetime {
@@ -37,7 +38,13 @@ struct QuadraticProgram {
 
 struct QpOptions {
   double tolerance = 1e-9;  // residuals relative to 1 + the data's size, and the mean complementarity
+  // Where rounding stops the iterations short of `tolerance`, the best iterate counts as a
+  // solution if its error is within this (as IPOPT's "solved to an acceptable level").
+  double acceptableTolerance = 1e-6;
   int maxIterations = 80;
+  // H is known to be convex (a least-squares program): no inertia correction, and a
+  // factorisation without the expected inertia ends the solve at its best iterate.
+  bool convex = false;
   // Regularisation of the two diagonal blocks: keeps the system quasi-definite with redundant
   // equality rows (contacts whose rows repeat each other) and a singular H.
   double primalRegularisation = 1e-10, dualRegularisation = 1e-9;
@@ -52,8 +59,25 @@ struct QpResult {
   std::string reason;
 };
 
-// Never throws; a program with no feasible point or no bounded minimum ends not converged
-// with the reason (the residuals that stopped falling).
-QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& options = {});
+// The symbolic part of a solve - K's pattern, where each matrix entry goes in it, the LDL^T's
+// ordering - kept between solves of programs with the same pattern (the steps of a restoration
+// or an SQP on one problem: 50 ms of the jump's 90 ms program).
+class QpWorkspace {
+ public:
+  QpWorkspace();
+  ~QpWorkspace();
+  QpWorkspace(const QpWorkspace&) = delete;
+  QpWorkspace& operator=(const QpWorkspace&) = delete;
+  struct Pattern;
+
+ private:
+  friend QpResult solveQuadraticProgram(const QuadraticProgram&, const QpOptions&, QpWorkspace*);
+  std::unique_ptr<Pattern> pattern_;
+};
+
+// Never throws; returns the best iterate found (by its largest scaled KKT residual). A program
+// with no feasible point or no bounded minimum ends not converged, with the reason.
+QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& options = {},
+                               QpWorkspace* workspace = nullptr);
 
 }  // namespace spacetime

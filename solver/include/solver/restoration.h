@@ -1,21 +1,28 @@
-// One step of feasibility restoration with the inequalities held as inequalities: at the
-// problem's current motion x, the convex quadratic program
+// Feasibility restoration with the inequalities held as inequalities: Gauss-Newton steps on
+// the violation alone, each a convex quadratic program solved by the interior point of
+// quadratic_program.h. At the problem's current motion x, a step solves
 //     min 1/2 |c(x) + J_c dx|^2 + damping/2 |dx|^2   subject to   g(x) + J_g dx <= 0
 // (c the equality rows, g the inequality rows - contact pushes and cones, clearances, limits)
-// solved by the interior point of quadratic_program.h, and x <- x (+) dx.
+// and sets x <- x (+) dx. Where some inequality is violated now, or the linearised inequalities
+// admit no point, the rows that are violated or within 0.05 of their bound become elastic:
+// 1/2 |max(0, g + J_g dx)|^2 joins the objective instead (the Gauss-Newton model of the merit
+// below; the hard program is one only where every inequality holds, as dx = 0 is then in it).
 //
 // This is the restoration both halves of Witkin & Kass's projected Newton method need, and the
-// Gauss-Newton step of "minimising the violation alone" that a restoration phase repeats. The
-// damped least-squares restoration measured in docs/design.md, which held no inequality, pushed
-// clearances and cones over their bounds at every step and reached at best 5.7e-4 from an
-// augmented-Lagrangian iterate at 1e-3; with the inequalities in the program two steps reach
-// below 1e-6 from there (tests/solver/restoration_test.cpp).
+// restoration phase that decides whether a stalled solve's constraints conflict:
+// minimiseViolation repeats damped steps (Levenberg-Marquardt's rule on the damping) on the
+// merit 1/2 |c|^2 + 1/2 |max(0, g)|^2 until the violation meets the tolerance (the
+// constraints do not conflict) or the merit stops falling at a positive value with its
+// projected gradient near zero (a positive minimum: they conflict, locally).
 //
-// The linearised inequalities must admit a point: a motion that violates inequalities by much
-// (a stalled solve) can leave the program without one, and the step then fails, changing
-// nothing.
+// The damped least-squares restoration measured in docs/design.md, which held no inequality,
+// pushed clearances and cones over their bounds at every step and reached at best 5.7e-4 from
+// an augmented-Lagrangian iterate at 1e-3; with the inequalities in the program two steps reach
+// below 1e-6 from there (tests/solver/restoration_test.cpp).
 #pragma once
 
+#include <chrono>
+#include <memory>
 #include <string>
 
 #include "solver/spacetime_problem.h"
@@ -23,13 +30,45 @@
 namespace spacetime {
 
 struct RestorationStep {
-  bool taken = false;  // the program was solved and the step applied
+  bool taken = false;    // a program was solved and its step applied
+  bool elastic = false;  // the step needed elastic rows (the linearised inequalities had no point)
   double violationBefore = 0, violationAfter = 0;  // largest constraint row, before and after
+  double meritBefore = 0, meritAfter = 0;          // 1/2 |c|^2 + 1/2 |max(0, g)|^2
+  double meritPredicted = 0;  // the linearised merit at the step (without the damping term)
   int qpIterations = 0;
   double qpSeconds = 0, seconds = 0;
   std::string reason;  // why no step was taken
 };
 
-RestorationStep restorationStep(SpacetimeProblem& problem, double damping, int threads = 1);
+struct RestorationResult {
+  enum class Outcome { Feasible, PositiveMinimum, Undecided };
+  Outcome outcome = Outcome::Undecided;
+  double violation = 0, merit = 0;
+  double stationarity = 0;  // the last step's |dx|_inf, relative: how far from a minimum it stopped
+  int steps = 0;
+  double seconds = 0;
+  std::string reason;
+};
+
+class Restoration {
+ public:
+  // Free contact ends are refused (ready() false): their instants are bounded variables.
+  explicit Restoration(SpacetimeProblem& problem, int threads = 1);
+  ~Restoration();
+  bool ready() const;
+  const std::string& error() const;
+
+  // One step with the given damping; a step whose program fails changes nothing.
+  RestorationStep step(double damping);
+
+  // Damped steps until the violation is within `tolerance`, a positive minimum of the merit, or
+  // maxSteps / the deadline. The motion is the last accepted step's (lower merit than before).
+  RestorationResult minimiseViolation(double tolerance, int maxSteps,
+                                      std::chrono::steady_clock::time_point deadline);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 }  // namespace spacetime
