@@ -24,6 +24,9 @@ namespace {
 // Rows this close to their bound (or past it) are elastic when the linearised inequalities
 // admit no point.
 constexpr double kElasticMargin = 0.05;
+// Rows further than this from their bound are left out of the programs unless a step crosses
+// them (see Restoration::step).
+constexpr double kScreen = 0.1;
 
 }  // namespace
 
@@ -34,7 +37,6 @@ struct Restoration::State {
   std::string error;
   std::vector<int> equality, inequality;
   QpWorkspace hard, elastic;  // the two programs' patterns, analysed once
-  std::vector<int> elasticRows;  // indices into `inequality` of the elastic program's rows
 
   State(SpacetimeProblem& p, int threads)
       : problem(p), vars(p.ceresProblem()), evaluator(p, vars, std::max(1, threads)) {
@@ -92,65 +94,85 @@ RestorationStep Restoration::step(double damping) {
   options.acceptableTolerance = 1e-9;
   options.convex = true;
 
-  // The hard program: every linearised inequality held.
-  QuadraticProgram qp;
-  qp.hessian = JtJ;
-  for (int i = 0; i < n; ++i) qp.hessian.coeffRef(i, i) += damping;
-  qp.gradient = Jc.transpose() * c;
-  qp.equalities.resize(0, n);
-  qp.equalityTargets.resize(0);
-  qp.inequalities = Jg;
-  qp.inequalityBounds = -g;
-  // The hard program is a model of the merit only where no inequality is violated now (dx = 0
-  // is then one of its points, so its minimum does not raise the merit); otherwise, or if it has
-  // no point, the elastic program is.
-  Clock::time_point t0 = Clock::now();
-  QpResult result;
-  if (g.size() == 0 || g.maxCoeff() <= 0) {
-    result = solveQuadraticProgram(qp, options, &st.hard);
-    step.qpSeconds += secondsSince(t0);
-    step.qpIterations += result.iterations;
-  }
+  // Screening: the programs hold only the rows within kScreen of their bound (a few hundred of
+  // the jump's 4332). That is exact, not an approximation: a convex program's minimum over fewer
+  // rows is its minimum over all of them if it meets the others, which is checked, and any it
+  // crosses join and the program is solved again.
+  std::vector<int> held;  // indices into st.inequality
+  for (Eigen::Index i = 0; i < g.size(); ++i)
+    if (g[i] > -kScreen) held.push_back(static_cast<int>(i));
+  const bool violated = g.size() > 0 && g.maxCoeff() > 0;
   Vec dx;
-  if (result.converged) {
-    dx = result.x;
-    step.meritPredicted = 0.5 * (c + Jc * dx).squaredNorm();
-  } else {
-    // The elastic program: variables [dx; v], rows g_i + J_i dx - v_i <= 0 for the elastic rows,
-    // 1/2 |v|^2 in the objective. Its rows are chosen once, at its first use.
-    if (st.elasticRows.empty())
-      for (size_t i = 0; i < st.inequality.size(); ++i)
-        if (g[static_cast<Eigen::Index>(i)] > -kElasticMargin) st.elasticRows.push_back(static_cast<int>(i));
-    const int k = static_cast<int>(st.elasticRows.size());
-    std::vector<Eigen::Triplet<double>> t;
-    for (int col = 0; col < JtJ.outerSize(); ++col)
-      for (SpMat::InnerIterator e(JtJ, col); e; ++e)
-        t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
-    for (int i = 0; i < n; ++i) t.emplace_back(i, i, damping);
-    for (int j = 0; j < k; ++j) t.emplace_back(n + j, n + j, 1.0);
-    QuadraticProgram ep;
-    ep.hessian.resize(n + k, n + k);
-    ep.hessian.setFromTriplets(t.begin(), t.end());
-    ep.gradient = Vec::Zero(n + k);
-    ep.gradient.head(n) = qp.gradient;
-    ep.equalities.resize(0, n + k);
-    ep.equalityTargets.resize(0);
-    t.clear();
-    for (int row = 0; row < Jg.outerSize(); ++row)
-      for (SpRow::InnerIterator e(Jg, row); e; ++e) t.emplace_back(row, static_cast<int>(e.col()), e.value());
-    for (int j = 0; j < k; ++j) t.emplace_back(st.elasticRows[j], n + j, -1.0);
-    ep.inequalities.resize(Jg.rows(), n + k);
-    ep.inequalities.setFromTriplets(t.begin(), t.end());
-    ep.inequalityBounds = -g;
-    t0 = Clock::now();
-    result = solveQuadraticProgram(ep, options, &st.elastic);
+  QpResult result;
+  for (int round = 0;; ++round) {
+    const SpRow C = raw::selectRows(Jg, held);
+    Vec d(static_cast<Eigen::Index>(held.size()));
+    for (size_t i = 0; i < held.size(); ++i) d[static_cast<Eigen::Index>(i)] = -g[held[i]];
+    // The hard program (every held row as it is) is a model of the merit only where no
+    // inequality is violated now (dx = 0 is then one of its points, so its minimum does not
+    // raise the merit); otherwise, or if it has no point, the elastic program is: variables
+    // [dx; v], rows g_i + J_i dx - v_i <= 0 for the rows within kElasticMargin, 1/2 |v|^2 in
+    // the objective.
+    step.elastic = false;
+    const Clock::time_point t0 = Clock::now();
+    if (!violated) {
+      QuadraticProgram qp;
+      qp.hessian = JtJ;
+      for (int i = 0; i < n; ++i) qp.hessian.coeffRef(i, i) += damping;
+      qp.gradient = Jc.transpose() * c;
+      qp.equalities.resize(0, n);
+      qp.equalityTargets.resize(0);
+      qp.inequalities = C;
+      qp.inequalityBounds = d;
+      result = solveQuadraticProgram(qp, options, &st.hard);
+    }
+    if (violated || !result.converged) {
+      std::vector<int> elastic;  // indices into `held`
+      for (size_t i = 0; i < held.size(); ++i)
+        if (g[held[i]] > -kElasticMargin) elastic.push_back(static_cast<int>(i));
+      const int k = static_cast<int>(elastic.size());
+      std::vector<Eigen::Triplet<double>> t;
+      for (int col = 0; col < JtJ.outerSize(); ++col)
+        for (SpMat::InnerIterator e(JtJ, col); e; ++e)
+          t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+      for (int i = 0; i < n; ++i) t.emplace_back(i, i, damping);
+      for (int j = 0; j < k; ++j) t.emplace_back(n + j, n + j, 1.0);
+      QuadraticProgram ep;
+      ep.hessian.resize(n + k, n + k);
+      ep.hessian.setFromTriplets(t.begin(), t.end());
+      ep.gradient = Vec::Zero(n + k);
+      ep.gradient.head(n) = Jc.transpose() * c;
+      ep.equalities.resize(0, n + k);
+      ep.equalityTargets.resize(0);
+      t.clear();
+      for (int row = 0; row < C.outerSize(); ++row)
+        for (SpRow::InnerIterator e(C, row); e; ++e) t.emplace_back(row, static_cast<int>(e.col()), e.value());
+      for (int j = 0; j < k; ++j) t.emplace_back(elastic[j], n + j, -1.0);
+      ep.inequalities.resize(C.rows(), n + k);
+      ep.inequalities.setFromTriplets(t.begin(), t.end());
+      ep.inequalityBounds = d;
+      result = solveQuadraticProgram(ep, options, &st.elastic);
+      step.elastic = true;
+    }
     step.qpSeconds += secondsSince(t0);
     step.qpIterations += result.iterations;
     if (!result.converged) return finish("the restoration program was not solved: " + result.reason);
-    step.elastic = true;
     dx = result.x.head(n);
-    step.meritPredicted = 0.5 * (c + Jc * dx).squaredNorm() + 0.5 * (g + Jg * dx).cwiseMax(0.0).squaredNorm();
+    // The rows left out that the step crosses (linearised) join, and the program is solved again.
+    const Vec linear = g + Jg * dx;
+    std::vector<char> isHeld(static_cast<size_t>(g.size()), 0);
+    for (int i : held) isHeld[static_cast<size_t>(i)] = 1;
+    bool added = false;
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+      if (!isHeld[static_cast<size_t>(i)] && linear[i] > 0) {
+        held.push_back(static_cast<int>(i));
+        added = true;
+      }
+    if (!added) break;
+    std::sort(held.begin(), held.end());
+    if (round >= 4) return finish("the screened rows kept changing");
   }
+  step.meritPredicted = 0.5 * (c + Jc * dx).squaredNorm() + 0.5 * (g + Jg * dx).cwiseMax(0.0).squaredNorm();
 
   const std::vector<double> before = st.vars.save();
   st.vars.plus(before, dx);
