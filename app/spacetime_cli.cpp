@@ -183,7 +183,9 @@ int run(int argc, char** argv) {
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = threads;
   options.maxSeconds = maxSeconds;
-  options.spentSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  // In budget seconds: an instrumented build's stretched budget counts its setup stretched too.
+  options.spentSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() / instrumentedTimeScale();
   options.newtonPolish = polish;
   if (!method.empty()) parseSolverMethod(method, &options.method);
   // What the interior point cannot take is refused before anything is solved or written.

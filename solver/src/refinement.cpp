@@ -107,7 +107,8 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     }
     best.attempts.push_back(attempt);
 
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    // In budget seconds (SolverOptions::deadlineFrom stretches budgets by the time scale).
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count() / instrumentedTimeScale();
     TranscriptionSpec finer;
     if (!refinement.enabled || level >= refinement.maxRefinements || !refinable(attempt.status, attempt.valid) ||
         (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds || !refineTranscription(spec, refinement, &finer))

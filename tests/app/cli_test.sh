@@ -164,6 +164,11 @@ grep -q "holds 'notes.txt', which a solve does not write" "$tmp/foreign.err" || 
 status=$?
 [ "$status" -eq 3 ] || fail "a solve past --max-seconds exited $status, expected 3"
 grep -q '"reason": "stopped after the time limit of 0.02 s' "$tmp/limited/summary.json" || fail "the time limit is not the reason: $(grep reason "$tmp/limited/summary.json")"
+# SPACETIME_TIME_SCALE (an instrumented build's slowness) stretches the budget: the same 0.1 s
+# at a hundred times the scale this run has is enough for the jump.
+scale="${SPACETIME_TIME_SCALE:-1}"
+SPACETIME_TIME_SCALE=$((scale * 100)) "$cli" solve "$scenes/luxo_jump.json" --out "$tmp/stretched" --max-seconds 0.1 --quiet 2>/dev/null ||
+  fail "a budget stretched by SPACETIME_TIME_SCALE exited $?"
 for bad in "--threads 0" "--threads x" "--max-seconds -1"; do
   "$cli" solve "$scenes/particle.json" --out "$tmp/bad_option" $bad 2>/dev/null
   status=$?

@@ -37,6 +37,7 @@
 #include "core/scene_io.h"
 #include "core/shape_mesh.h"
 #include "dynamics/algorithms.h"
+#include "solver/augmented_lagrangian.h"
 #include "solver/interior_point.h"
 #include "solver/spacetime_problem.h"
 #include "ui/main_window.h"
@@ -50,6 +51,10 @@ using namespace spacetime::ui;
 namespace {
 
 std::string json(const Document& d) { return sceneToJson(d.scene()); }
+
+// A wait for a solve or a timer, stretched in an instrumented build (SPACETIME_TIME_SCALE, set
+// by the sanitizer presets), as the solves' own budgets are.
+int scaled(int ms) { return static_cast<int>(ms * instrumentedTimeScale()); }
 
 void setSpin(QWidget* vectorEditor, const char* axis, double value) {
   auto* spin = vectorEditor->findChild<QDoubleSpinBox*>(axis);
@@ -117,7 +122,7 @@ void shiftDrag(MainWindow& w, QPointF p0, QPoint p1) {
 bool solvedParticle(MainWindow& w) {
   if (!openScene(w, ":/scenes/particle.json")) return false;
   w.solve();
-  return w.solverJob()->waitForFinished(60000);
+  return w.solverJob()->waitForFinished(scaled(60000));
 }
 
 Scene emptyScene() {
@@ -181,7 +186,7 @@ class EditorTest : public QObject {
     QVERIFY((term.position - target).norm() < 1e-9);
 
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(120000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(120000)));
     QVERIFY2(doc.motion() && doc.motion()->converged, qPrintable(w.statusText()));
     const Model<double>& model = doc.models()[0];
     const Eigen::VectorXd q = poseAt(doc.motion()->animation.characters[0], 0.5);
@@ -430,7 +435,7 @@ class EditorTest : public QObject {
     });
     QElapsedTimer clock;
     clock.start();
-    QTRY_VERIFY_WITH_TIMEOUT(QFile::exists(first->autosavePath()), 3 * MainWindow::kAutosaveDelayMs);
+    QTRY_VERIFY_WITH_TIMEOUT(QFile::exists(first->autosavePath()), scaled(3 * MainWindow::kAutosaveDelayMs));
     QVERIFY(clock.elapsed() < 3 * MainWindow::kAutosaveDelayMs);
     const QString path = first->autosavePath();
     MainWindow second;  // another editor instance starting up
@@ -488,7 +493,7 @@ class EditorTest : public QObject {
     MainWindow w;
     QVERIFY(openLuxo(w));
     w.setAutoSolve(true);
-    QVERIFY(w.solverJob()->waitForFinished(120000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(120000)));
     const auto good = w.document()->motion();
     QVERIFY2(good && good->converged, qPrintable(w.statusText()));
     QVERIFY(w.document()->showsSolutionOfScene());
@@ -500,10 +505,10 @@ class EditorTest : public QObject {
           for (auto& [dof, value] : t.values)
             if (dof == "base_x") value += 0.27;
     }, kMergeTermField);
-    QTRY_VERIFY_WITH_TIMEOUT(w.solverJob()->isRunning(), 5000);
-    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() != good, 20000);  // a live iterate
+    QTRY_VERIFY_WITH_TIMEOUT(w.solverJob()->isRunning(), scaled(5000));
+    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() != good, scaled(20000));  // a live iterate
     w.stopSolve();
-    QVERIFY(w.solverJob()->waitForFinished(10000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(10000)));
     QTRY_VERIFY(w.document()->stoppedMotion() != nullptr);
     QVERIFY(!w.document()->stoppedMotion()->converged);
     QCOMPARE(w.document()->motion()->animation.characters[0].q, q);
@@ -519,9 +524,9 @@ class EditorTest : public QObject {
 
     // Redo returns to the dragged scene, whose re-solve had not converged: it solves again.
     w.document()->undoStack()->redo();
-    QTRY_VERIFY_WITH_TIMEOUT(w.solverJob()->isRunning(), 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(w.solverJob()->isRunning(), scaled(5000));
     w.stopSolve();
-    QVERIFY(w.solverJob()->waitForFinished(10000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(10000)));
     QTRY_VERIFY(w.document()->stoppedMotion() != nullptr);
     const auto stopped = w.document()->stoppedMotion();
     QAction* show = nullptr;
@@ -728,7 +733,7 @@ class EditorTest : public QObject {
     QCOMPARE(doc.scene().endTime, 2.5);
     // The edited scene solves (the particle over 2.5 s under moon gravity), with the method chosen.
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(60000)));
     QVERIFY2(doc.motion() && doc.motion()->converged, qPrintable(w.statusText()));
     if (interiorPointAvailable()) QVERIFY2(w.statusText().contains("interior-point"), qPrintable(w.statusText()));
     while (doc.undoStack()->canUndo() && doc.undoStack()->index() > commands) doc.undoStack()->undo();
@@ -764,11 +769,11 @@ class EditorTest : public QObject {
     // so a fixed wait could see it finish.
     const auto initial = w.document()->motion();
     w.solve();
-    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() != initial, 20000);
+    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() != initial, scaled(20000));
     QElapsedTimer clock;
     clock.start();
     w.stopSolve();
-    QVERIFY(w.solverJob()->waitForFinished(10000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(10000)));
     qInfo("stopped %lld ms after Stop: %s", clock.elapsed(), qPrintable(w.statusText()));
     QCOMPARE(json(*w.document()), before);
     QCOMPARE(w.document()->undoStack()->count(), commands);
@@ -794,7 +799,7 @@ class EditorTest : public QObject {
     QVERIFY(w.document()->currentTime() > 0);
     // Solving again continues from where Stop left it.
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(300000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(300000)));
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
   }
 
@@ -858,7 +863,7 @@ class EditorTest : public QObject {
     MainWindow w;
     QVERIFY(openLuxo(w));
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(300000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(300000)));
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
     const Document& doc = *w.document();
     auto series = [&](const char* key) {
@@ -952,7 +957,7 @@ class EditorTest : public QObject {
     QVERIFY(openScene(w, ":/scenes/particle.json"));
     QVERIFY2(w.validity()->verdict().contains("Solve"), qPrintable(w.validity()->verdict()));
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(60000)));
     QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
     const auto motion = w.document()->motion();
     const std::vector<ValidityCheck> checks = validityChecklist(*motion->validity);
@@ -976,7 +981,7 @@ class EditorTest : public QObject {
     });
     const std::string pinned = w.document()->scene().terms[1].id;
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(60000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(60000)));
     QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
     QVERIFY(!w.document()->motion()->converged);
     QVERIFY2(w.validity()->verdict().contains("unmet"), qPrintable(w.validity()->verdict()));
@@ -1117,7 +1122,7 @@ class EditorTest : public QObject {
     QCOMPARE(scene.characters.size(), size_t(1));
     QCOMPARE(scene.characters[0].bodies.size(), size_t(7));
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(240000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(240000)));
     QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
     QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
@@ -1223,7 +1228,7 @@ class EditorTest : public QObject {
     QCOMPARE(contacts, 2);
 
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(240000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(240000)));
     QTRY_VERIFY(doc.motion() && doc.motion()->validity);
     QVERIFY2(doc.motion()->converged, qPrintable(w.statusText()));
     QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
@@ -1252,7 +1257,7 @@ class EditorTest : public QObject {
     });
     w.solve();
     QVERIFY(bar->isVisible());
-    QTRY_VERIFY_WITH_TIMEOUT(!w.solverJob()->isRunning() && !bar->isVisible(), 120000);
+    QTRY_VERIFY_WITH_TIMEOUT(!w.solverJob()->isRunning() && !bar->isVisible(), scaled(120000));
     QVERIFY(w.document()->motion() && w.document()->motion()->converged);
     QVERIFY(seen.size() >= 3);
     QVERIFY(!hiddenDuringSolve);
@@ -1395,7 +1400,7 @@ class EditorTest : public QObject {
     QVERIFY2((problem->jointState(0, 0.0, 0) - posed).cwiseAbs().maxCoeff() < 1e-3,
              qPrintable(QString::number((problem->jointState(0, 0.0, 0) - posed).cwiseAbs().maxCoeff())));
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(120000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(120000)));
     QTRY_VERIFY(doc.motion() && doc.motion()->converged);
     QVERIFY((doc.posesNow()[0] - posed).cwiseAbs().maxCoeff() < 1e-5);
 
@@ -1580,7 +1585,7 @@ class EditorTest : public QObject {
     MainWindow w;
     QVERIFY(openLuxo(w, QSize(1200, 800)));
     w.solve();
-    QVERIFY(w.solverJob()->waitForFinished(120000));
+    QVERIFY(w.solverJob()->waitForFinished(scaled(120000)));
     QTRY_VERIFY(w.document()->motion() && w.document()->motion()->converged);
     Document& doc = *w.document();
     doc.setCurrentTime(0.0);

@@ -81,9 +81,17 @@ struct SolverOptions {
   int stallUpdates = 10;
 
   std::string validate() const;  // empty if valid, else what is wrong
-  // The wall-clock instant a solve started at `start` must stop: maxSeconds less spentSeconds.
+  // The wall-clock instant a solve started at `start` must stop: maxSeconds less spentSeconds,
+  // times instrumentedTimeScale().
   std::chrono::steady_clock::time_point deadlineFrom(std::chrono::steady_clock::time_point start) const;
 };
+
+// How much slower than a Release build this process runs, from the environment variable
+// SPACETIME_TIME_SCALE (1 to 1000; 1 when unset): the sanitizer presets set 10, since an
+// AddressSanitizer or ThreadSanitizer build solves about ten times slower, and every wall-clock
+// budget of a solve (maxSeconds, --max-seconds, the scene's limit) stretches by it. The tests'
+// own waits read it too.
+double instrumentedTimeScale();
 
 // The options a scene asks for (its `solver` block); the rest keep their defaults.
 SolverOptions solverOptionsFor(const SolverSpec& spec);
