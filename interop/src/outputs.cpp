@@ -47,6 +47,7 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["outer_iterations"] = s.outerIterations;
   j["newton_steps"] = s.newtonSteps;
   j["restoration_steps"] = s.restorationSteps;
+  j["restoration_seconds"] = s.restorationSeconds;
   j["polished"] = s.polished;
   j["solve_seconds"] = s.solveSeconds;
   j["jacobian_seconds"] = s.jacobianSeconds;

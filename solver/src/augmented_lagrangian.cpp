@@ -236,7 +236,7 @@ namespace {
 
 void restorationPhase(SpacetimeProblem& problem, const SolverOptions& options, Clock::time_point deadline,
                       SolverSummary* summary) {
-  constexpr int kSteps = 40;
+  constexpr int kSteps = 15;
   Restoration restoration(problem, options.threads);
   if (!restoration.ready()) {
     summary->reason += ": some of them may conflict";
@@ -245,6 +245,7 @@ void restorationPhase(SpacetimeProblem& problem, const SolverOptions& options, C
   const SolutionState stalled = problem.state();
   const RestorationResult r = restoration.minimiseViolation(options.tolerance, kSteps, deadline);
   summary->restorationSteps = r.steps;
+  summary->restorationSeconds = r.seconds;
   switch (r.outcome) {
     case RestorationResult::Outcome::PositiveMinimum:
       problem.restore(stalled);
@@ -484,11 +485,12 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   problem.syncFreeEnds();  // the problem's times follow the solved lift-off instants
   m = measure(problem);
   if (summary.status == SolveStatus::Stalled && m.maxViolation > options.tolerance) {
-    // A fifth of the time the solve took (at least a second): where Gauss-Newton crawls at a
+    // A tenth of the time the solve took (at least a second): where Gauss-Newton crawls at a
     // positive residual, longer buys little (the 1.5 m rung at 45 control points per second:
-    // 1/2 |c|^2 1.1e-4 -> 1.0e-4 in 400 more steps).
+    // 1/2 |c|^2 1.1e-4 -> 1.0e-4 in 400 more steps), and with a fifth and 40 steps the rung's
+    // four stalled transcriptions took 120 s instead of 70.
     const Clock::time_point cap = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                     std::chrono::duration<double>(std::max(1.0, 0.2 * secondsSince(start))));
+                                                     std::chrono::duration<double>(std::max(1.0, 0.1 * secondsSince(start))));
     restorationPhase(problem, options, std::min(deadline, cap), &summary);
   }
   m = measure(problem);

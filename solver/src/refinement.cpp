@@ -93,6 +93,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.outerIterations += summary.outerIterations;
     total.newtonSteps += summary.newtonSteps;
     total.restorationSteps += summary.restorationSteps;
+    total.restorationSeconds += summary.restorationSeconds;
     total.jacobianSeconds += summary.jacobianSeconds;
     total.linearSolverSeconds += summary.linearSolverSeconds;
     const std::string failure = describe(attempt, checks);
@@ -137,6 +138,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.outerIterations = total.outerIterations;
   best.summary.newtonSteps = total.newtonSteps;
   best.summary.restorationSteps = total.restorationSteps;
+  best.summary.restorationSeconds = total.restorationSeconds;
   best.summary.jacobianSeconds = total.jacobianSeconds;
   best.summary.linearSolverSeconds = total.linearSolverSeconds;
   best.summary.solveSeconds = std::chrono::duration<double>(Clock::now() - start).count();

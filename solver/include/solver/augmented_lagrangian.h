@@ -129,6 +129,7 @@ struct SolverSummary {
   int iterations = 0;           // total Levenberg-Marquardt (interior point: IPOPT) iterations
   int newtonSteps = 0;          // of the Newton polish, whether it succeeded or not
   int restorationSteps = 0;     // of the restoration phase after a stall (solver/restoration.h)
+  double restorationSeconds = 0;
   bool polished = false;        // the result is the Newton polish's KKT point
   double solveSeconds = 0;
   double jacobianSeconds = 0;   // Ceres's time in residual and Jacobian evaluation
