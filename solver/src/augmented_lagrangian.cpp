@@ -487,8 +487,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   if (summary.status == SolveStatus::Stalled && m.maxViolation > options.tolerance) {
     // A tenth of the time the solve took (at least a second): where Gauss-Newton crawls at a
     // positive residual, longer buys little (the 1.5 m rung at 45 control points per second:
-    // 1/2 |c|^2 1.1e-4 -> 1.0e-4 in 400 more steps), and with a fifth and 40 steps the rung's
-    // four stalled transcriptions took 120 s instead of 70.
+    // 1/2 |c|^2 1.1e-4 -> 1.0e-4 in 400 more steps). The rung's four phases: 45 steps, 3.5 s.
     const Clock::time_point cap = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                      std::chrono::duration<double>(std::max(1.0, 0.1 * secondsSince(start))));
     restorationPhase(problem, options, std::min(deadline, cap), &summary);
