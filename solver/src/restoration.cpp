@@ -27,6 +27,8 @@ constexpr double kElasticMargin = 0.05;
 // Rows further than this from their bound are left out of the programs unless a step crosses
 // them (see Restoration::step).
 constexpr double kScreen = 0.1;
+// Below this largest row the programs' own accuracy, not the constraints, may stop the steps.
+constexpr double kAccuracyFloor = 1e-6;
 
 }  // namespace
 
@@ -211,8 +213,12 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
     const RestorationStep s = step(damping);
     ++out.steps;
     // First-order certificate of a positive minimum: the convex linearised merit, nearly
-    // undamped, has its minimum where the motion is (no direction lowers the violation).
-    if (s.taken && damping <= 1e-6 && s.meritBefore - s.meritPredicted <= 1e-9 * s.meritBefore) {
+    // undamped, has its minimum where the motion is (no direction lowers the violation). Not
+    // claimed near the programs' accuracy (a largest row of about 1e-7: rows whose multipliers
+    // are nearly zero sit mu / z off their bound), where the jump, feasible, stopped at 7.8e-8
+    // when asked for 1e-8.
+    if (s.taken && damping <= 1e-6 && s.meritBefore - s.meritPredicted <= 1e-9 * s.meritBefore &&
+        s.violationBefore > kAccuracyFloor) {
       st.vars.load(before);
       out.outcome = RestorationResult::Outcome::PositiveMinimum;
       break;
@@ -225,15 +231,18 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
       // A positive minimum: with little damping the steps stop lowering the merit.
       sinceProgress = decrease < 1e-6 && damping <= 1e-6 ? sinceProgress + 1 : 0;
       if (sinceProgress >= 3) {
-        out.outcome = RestorationResult::Outcome::PositiveMinimum;
+        if (out.violation > kAccuracyFloor) out.outcome = RestorationResult::Outcome::PositiveMinimum;
+        else out.reason = "at the programs' accuracy";
         break;
       }
     } else {
       if (s.taken) st.vars.load(before);
       damping *= 10;
       if (damping > 1e8) {
-        // Even a step as short as the damping allows does not lower the merit: a minimum.
-        out.outcome = RestorationResult::Outcome::PositiveMinimum;
+        // Even a step as short as the damping allows does not lower the merit: a minimum, or
+        // the programs' accuracy.
+        if (out.violation > kAccuracyFloor) out.outcome = RestorationResult::Outcome::PositiveMinimum;
+        else out.reason = "at the programs' accuracy";
         break;
       }
     }

@@ -68,6 +68,11 @@ TEST(Restoration, MinimisingTheViolationAloneFindsTheJumpFeasible) {
   EXPECT_EQ(r.outcome, RestorationResult::Outcome::Feasible) << r.reason;
   EXPECT_LE(measure(*problem).maxViolation, 1e-7);
   std::printf("%s (%.2f s)\n", r.reason.c_str(), r.seconds);
+  // Asked for more than the programs' accuracy (a largest row of about 1e-7), it must not call
+  // the feasible jump's constraints conflicting (it did, at 7.8e-8, when asked for 1e-8).
+  const RestorationResult tighter = restoration.minimiseViolation(1e-10, 10, std::chrono::steady_clock::now() + std::chrono::minutes(2));
+  EXPECT_NE(tighter.outcome, RestorationResult::Outcome::PositiveMinimum) << tighter.reason;
+  std::printf("%s\n", tighter.reason.c_str());
 }
 
 }  // namespace
