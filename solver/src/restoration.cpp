@@ -30,6 +30,44 @@ constexpr double kScreen = 0.1;
 // Below this largest row the programs' own accuracy, not the constraints, may stop the steps.
 constexpr double kAccuracyFloor = 1e-6;
 
+// min 1/2 dx^T M dx + b.dx subject to C dx <= d.
+QuadraticProgram hardProgram(const SpMat& M, const Vec& b, const SpRow& C, const Vec& d) {
+  QuadraticProgram qp;
+  qp.hessian = M;
+  qp.gradient = b;
+  qp.equalities.resize(0, M.cols());
+  qp.equalityTargets.resize(0);
+  qp.inequalities = C;
+  qp.inequalityBounds = d;
+  return qp;
+}
+
+// The same with the rows `elastic` of C relaxed: variables [dx; v], rows C_i dx - v_i <= d_i,
+// and 1/2 |v|^2 in the objective.
+QuadraticProgram elasticProgram(const SpMat& M, const Vec& b, const SpRow& C, const Vec& d,
+                                const std::vector<int>& elastic) {
+  const int n = static_cast<int>(M.cols()), k = static_cast<int>(elastic.size());
+  std::vector<Eigen::Triplet<double>> t;
+  for (int col = 0; col < M.outerSize(); ++col)
+    for (SpMat::InnerIterator e(M, col); e; ++e) t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+  for (int j = 0; j < k; ++j) t.emplace_back(n + j, n + j, 1.0);
+  QuadraticProgram qp;
+  qp.hessian.resize(n + k, n + k);
+  qp.hessian.setFromTriplets(t.begin(), t.end());
+  qp.gradient = Vec::Zero(n + k);
+  qp.gradient.head(n) = b;
+  qp.equalities.resize(0, n + k);
+  qp.equalityTargets.resize(0);
+  t.clear();
+  for (int row = 0; row < C.outerSize(); ++row)
+    for (SpRow::InnerIterator e(C, row); e; ++e) t.emplace_back(row, static_cast<int>(e.col()), e.value());
+  for (int j = 0; j < k; ++j) t.emplace_back(elastic[j], n + j, -1.0);
+  qp.inequalities.resize(C.rows(), n + k);
+  qp.inequalities.setFromTriplets(t.begin(), t.end());
+  qp.inequalityBounds = d;
+  return qp;
+}
+
 }  // namespace
 
 struct Restoration::State {
@@ -88,7 +126,11 @@ RestorationStep Restoration::step(double damping) {
   Vec c(static_cast<Eigen::Index>(st.equality.size())), g(static_cast<Eigen::Index>(st.inequality.size()));
   for (size_t i = 0; i < st.equality.size(); ++i) c[static_cast<Eigen::Index>(i)] = rows.values[st.equality[i]];
   for (size_t i = 0; i < st.inequality.size(); ++i) g[static_cast<Eigen::Index>(i)] = rows.values[st.inequality[i]];
-  const SpMat JtJ = SpMat(Jc.transpose()) * Jc;
+  // The model: 1/2 dx^T M dx + b.dx is 1/2 |c + J_c dx|^2 + damping/2 |dx|^2 less a constant.
+  SpMat identity(n, n);
+  identity.setIdentity();
+  const SpMat M = SpMat(Jc.transpose()) * Jc + damping * identity;
+  const Vec b = Jc.transpose() * c;
   // Tight: near a feasible point the step is of the size of the violation, and an inexact
   // interior point leaves rows whose multipliers are nearly zero off by mu / z.
   QpOptions options;
@@ -117,43 +159,12 @@ RestorationStep Restoration::step(double damping) {
     // the objective.
     step.elastic = false;
     const Clock::time_point t0 = Clock::now();
-    if (!violated) {
-      QuadraticProgram qp;
-      qp.hessian = JtJ;
-      for (int i = 0; i < n; ++i) qp.hessian.coeffRef(i, i) += damping;
-      qp.gradient = Jc.transpose() * c;
-      qp.equalities.resize(0, n);
-      qp.equalityTargets.resize(0);
-      qp.inequalities = C;
-      qp.inequalityBounds = d;
-      result = solveQuadraticProgram(qp, options, &st.hard);
-    }
+    if (!violated) result = solveQuadraticProgram(hardProgram(M, b, C, d), options, &st.hard);
     if (violated || !result.converged) {
       std::vector<int> elastic;  // indices into `held`
       for (size_t i = 0; i < held.size(); ++i)
         if (g[held[i]] > -kElasticMargin) elastic.push_back(static_cast<int>(i));
-      const int k = static_cast<int>(elastic.size());
-      std::vector<Eigen::Triplet<double>> t;
-      for (int col = 0; col < JtJ.outerSize(); ++col)
-        for (SpMat::InnerIterator e(JtJ, col); e; ++e)
-          t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
-      for (int i = 0; i < n; ++i) t.emplace_back(i, i, damping);
-      for (int j = 0; j < k; ++j) t.emplace_back(n + j, n + j, 1.0);
-      QuadraticProgram ep;
-      ep.hessian.resize(n + k, n + k);
-      ep.hessian.setFromTriplets(t.begin(), t.end());
-      ep.gradient = Vec::Zero(n + k);
-      ep.gradient.head(n) = Jc.transpose() * c;
-      ep.equalities.resize(0, n + k);
-      ep.equalityTargets.resize(0);
-      t.clear();
-      for (int row = 0; row < C.outerSize(); ++row)
-        for (SpRow::InnerIterator e(C, row); e; ++e) t.emplace_back(row, static_cast<int>(e.col()), e.value());
-      for (int j = 0; j < k; ++j) t.emplace_back(elastic[j], n + j, -1.0);
-      ep.inequalities.resize(C.rows(), n + k);
-      ep.inequalities.setFromTriplets(t.begin(), t.end());
-      ep.inequalityBounds = d;
-      result = solveQuadraticProgram(ep, options, &st.elastic);
+      result = solveQuadraticProgram(elasticProgram(M, b, C, d, elastic), options, &st.elastic);
       step.elastic = true;
     }
     step.qpSeconds += secondsSince(t0);
