@@ -164,16 +164,6 @@ std::vector<std::vector<double>> rawRows(const SpacetimeProblem& problem) {
   return rows;
 }
 
-// How far a constraint row is from holding (0 for objective rows).
-double rowViolation(RowKind kind, double row) {
-  switch (kind) {
-    case RowKind::Objective: return 0;
-    case RowKind::Equality: return std::abs(row);
-    case RowKind::Inequality: return std::max(0.0, row);
-  }
-  return 0;
-}
-
 ProblemMeasures measure(const SpacetimeProblem& problem, const std::vector<std::vector<double>>& rows) {
   ProblemMeasures m;
   for (size_t k = 0; k < rows.size(); ++k) {
@@ -491,8 +481,8 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     const Clock::time_point cap = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                      std::chrono::duration<double>(std::max(1.0, 0.1 * secondsSince(start))));
     restorationPhase(problem, options, std::min(deadline, cap), &summary);
+    m = measure(problem);
   }
-  m = measure(problem);
   if (summary.status == SolveStatus::IterationLimit && m.maxViolation <= options.tolerance)
     summary.reason = "constraints within tolerance, but the augmented Lagrangian was not yet "
                      "stationary after " + std::to_string(options.maxOuterIterations) +

@@ -259,11 +259,7 @@ class SpacetimeNlp : public Ipopt::TNLP {
     evaluationSeconds_ += secondsSince(t0);
     return valuesFinite_;
   }
-  Vec objectiveValues() const {
-    Vec r(static_cast<Eigen::Index>(objective_.size()));
-    for (size_t i = 0; i < objective_.size(); ++i) r[static_cast<Eigen::Index>(i)] = rows_.values[objective_[i]];
-    return r;
-  }
+  Vec objectiveValues() const { return raw::selectValues(rows_.values, objective_); }
   const SpMat& gaussNewton() {
     if (!gaussNewtonValid_) {
       gaussNewton_ = SpMat(objectiveJacobian_.transpose()) * objectiveJacobian_;

@@ -65,11 +65,6 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     held[r] = 1;
     multipliers[r] = estimate;
   }
-  auto pick = [](const Vec& v, const std::vector<int>& which) {
-    Vec out(static_cast<Eigen::Index>(which.size()));
-    for (size_t i = 0; i < which.size(); ++i) out[static_cast<Eigen::Index>(i)] = v[which[i]];
-    return out;
-  };
   auto inactiveViolation = [&](const Vec& values) {  // inequalities outside the active set
     double worst = 0;
     for (int r = 0; r < rowCount; ++r)
@@ -95,9 +90,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     for (int r = 0; r < rowCount; ++r)
       if (held[r]) constraint.push_back(r);
     const int m = static_cast<int>(constraint.size());
-    const Vec y = pick(multipliers, constraint);
+    const Vec y = raw::selectValues(multipliers, constraint);
     const SpRow Jr = raw::selectRows(rows.jacobian, objective), A = raw::selectRows(rows.jacobian, constraint);
-    const Vec r = pick(rows.values, objective), c = pick(rows.values, constraint);
+    const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, constraint);
     const Vec grad = Jr.transpose() * r;
     const double kkt = (grad + A.transpose() * y).lpNorm<Eigen::Infinity>() /
                        std::max(1.0, grad.lpNorm<Eigen::Infinity>());
@@ -229,8 +224,8 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       if (!finite) continue;
       const Vec yTrial = y + alpha * (d.tail(m) - y);
       const SpRow At = raw::selectRows(trial.jacobian, constraint), Jt = raw::selectRows(trial.jacobian, objective);
-      const Vec gt = Jt.transpose() * pick(trial.values, objective);
-      const Vec ct = pick(trial.values, constraint);
+      const Vec gt = Jt.transpose() * raw::selectValues(trial.values, objective);
+      const Vec ct = raw::selectValues(trial.values, constraint);
       const double kktTrial = (gt + At.transpose() * yTrial).lpNorm<Eigen::Infinity>() / std::max(1.0, gt.lpNorm<Eigen::Infinity>());
       // Only the held rows judge the step: an inequality it violates is held at the next step.
       const double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;

@@ -109,7 +109,7 @@ namespace {
 class ReducedSystem {
  public:
   ReducedSystem(const QuadraticProgram& qp, const QpOptions& options, QpWorkspace::Pattern& pattern)
-      : qp_(qp), options_(options), p_(pattern), base_(Vec::Zero(pattern.K.nonZeros())) {
+      : qp_(qp), p_(pattern), base_(Vec::Zero(pattern.K.nonZeros())) {
     int i = 0;
     for (int k = 0; k < qp.hessian.outerSize(); ++k)
       for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
@@ -161,7 +161,6 @@ class ReducedSystem {
 
  private:
   const QuadraticProgram& qp_;
-  const QpOptions& options_;
   QpWorkspace::Pattern& p_;
   Vec base_;
   double maxDiagonal_ = 0, shift_ = 0;

@@ -28,6 +28,13 @@ inline double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// The entries `which` of v, in that order.
+inline Vec selectValues(const Vec& v, const std::vector<int>& which) {
+  Vec out(static_cast<Eigen::Index>(which.size()));
+  for (size_t i = 0; i < which.size(); ++i) out[static_cast<Eigen::Index>(i)] = v[which[i]];
+  return out;
+}
+
 // The rows `which` of J, in that order, keeping J's pattern (explicit zeros included).
 inline SpRow selectRows(const SpRow& J, const std::vector<int>& which) {
   Eigen::Index nonzeros = 0;

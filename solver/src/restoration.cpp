@@ -86,16 +86,15 @@ struct Restoration::State {
       if (evaluator.kind(r) == RowKind::Inequality) inequality.push_back(r);
     }
   }
+  // The largest row violation, and the merit 1/2 sum of the rows' squared violations.
   double violation(const Vec& values) const {
     double worst = 0;
-    for (int r : equality) worst = std::max(worst, std::abs(values[r]));
-    for (int r : inequality) worst = std::max(worst, values[r]);
+    for (int r = 0; r < evaluator.rows(); ++r) worst = std::max(worst, rowViolation(evaluator.kind(r), values[r]));
     return worst;
   }
   double merit(const Vec& values) const {
     double m = 0;
-    for (int r : equality) m += values[r] * values[r];
-    for (int r : inequality) m += std::max(0.0, values[r]) * std::max(0.0, values[r]);
+    for (int r = 0; r < evaluator.rows(); ++r) m += std::pow(rowViolation(evaluator.kind(r), values[r]), 2);
     return 0.5 * m;
   }
 };
@@ -123,9 +122,7 @@ RestorationStep Restoration::step(double damping) {
   const int n = st.vars.tangent;
   const SpRow Jc = raw::selectRows(rows.jacobian, st.equality);
   const SpRow Jg = raw::selectRows(rows.jacobian, st.inequality);
-  Vec c(static_cast<Eigen::Index>(st.equality.size())), g(static_cast<Eigen::Index>(st.inequality.size()));
-  for (size_t i = 0; i < st.equality.size(); ++i) c[static_cast<Eigen::Index>(i)] = rows.values[st.equality[i]];
-  for (size_t i = 0; i < st.inequality.size(); ++i) g[static_cast<Eigen::Index>(i)] = rows.values[st.inequality[i]];
+  const Vec c = raw::selectValues(rows.values, st.equality), g = raw::selectValues(rows.values, st.inequality);
   // The model: 1/2 dx^T M dx + b.dx is 1/2 |c + J_c dx|^2 + damping/2 |dx|^2 less a constant.
   SpMat identity(n, n);
   identity.setIdentity();
@@ -150,8 +147,7 @@ RestorationStep Restoration::step(double damping) {
   QpResult result;
   for (int round = 0;; ++round) {
     const SpRow C = raw::selectRows(Jg, held);
-    Vec d(static_cast<Eigen::Index>(held.size()));
-    for (size_t i = 0; i < held.size(); ++i) d[static_cast<Eigen::Index>(i)] = -g[held[i]];
+    const Vec d = -raw::selectValues(g, held);
     // The hard program (every held row as it is) is a model of the merit only where no
     // inequality is violated now (dx = 0 is then one of its points, so its minimum does not
     // raise the merit); otherwise, or if it has no point, the elastic program is: variables
@@ -215,6 +211,12 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
   // after one that does not (which is undone).
   double damping = 1e-6;
   int sinceProgress = 0;
+  // The steps stopped lowering the merit: a positive minimum, unless the violation is down at
+  // the programs' own accuracy.
+  auto stoppedAtMinimum = [&] {
+    if (out.violation > kAccuracyFloor) out.outcome = RestorationResult::Outcome::PositiveMinimum;
+    else out.reason = "at the programs' accuracy";
+  };
   while (out.violation > tolerance) {
     if (out.steps >= maxSteps || Clock::now() > deadline) {
       out.reason = "out of steps or time";
@@ -242,18 +244,15 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
       // A positive minimum: with little damping the steps stop lowering the merit.
       sinceProgress = decrease < 1e-6 && damping <= 1e-6 ? sinceProgress + 1 : 0;
       if (sinceProgress >= 3) {
-        if (out.violation > kAccuracyFloor) out.outcome = RestorationResult::Outcome::PositiveMinimum;
-        else out.reason = "at the programs' accuracy";
+        stoppedAtMinimum();
         break;
       }
     } else {
       if (s.taken) st.vars.load(before);
       damping *= 10;
       if (damping > 1e8) {
-        // Even a step as short as the damping allows does not lower the merit: a minimum, or
-        // the programs' accuracy.
-        if (out.violation > kAccuracyFloor) out.outcome = RestorationResult::Outcome::PositiveMinimum;
-        else out.reason = "at the programs' accuracy";
+        // Even a step as short as the damping allows does not lower the merit.
+        stoppedAtMinimum();
         break;
       }
     }

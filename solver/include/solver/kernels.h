@@ -26,6 +26,17 @@ using JetChunk = ceres::Jet<double, kJetWidth>;
 
 enum class RowKind : unsigned char { Objective, Equality, Inequality };
 
+// How far a row of that kind is from holding: |c| for an equality, max(0, g) for an inequality
+// g <= 0, 0 for an objective row.
+inline double rowViolation(RowKind kind, double row) {
+  switch (kind) {
+    case RowKind::Objective: return 0;
+    case RowKind::Equality: return row < 0 ? -row : row;
+    case RowKind::Inequality: return row > 0 ? row : 0.0;
+  }
+  return 0;
+}
+
 class Kernel {
  public:
   virtual ~Kernel() = default;
