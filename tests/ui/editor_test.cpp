@@ -448,10 +448,11 @@ class EditorTest : public QObject {
 
   // The longest event-loop gap in the first 4 s of a Luxo solve from the default guess, and the
   // iterates that reached the interface.
+  // In an instrumented build (SPACETIME_TIME_SCALE > 1) the window is stretched like the solve.
   static EventLoopGap luxoSolveGap(WindowMode mode) {
     MainWindow w;
     if (!openLuxo(w, mode == WindowMode::Hidden ? std::nullopt : std::optional<QSize>(QSize(1400, 900)))) return {};
-    return eventLoopGapDuringSolve(w, mode);
+    return eventLoopGapDuringSolve(w, mode, scaled(4000));
   }
 
   void luxoSolveKeepsTheEventLoopResponsive() {
@@ -472,7 +473,10 @@ class EditorTest : public QObject {
     // live iterates come at most every 250 ms, so 2 or 3 arrive (3 of 3 runs, then 2: asking for
     // 3 failed at random); 2 still means a live iterate after the starting motion.
     QVERIFY(hidden.iterates >= 2);
-    QVERIFY2(hidden.worstMs >= 0 && hidden.worstMs <= 50, qPrintable(QString("event loop stalled %1 ms").arg(hidden.worstMs)));
+    // The 50 ms bound is a property of the Release build: under a sanitizer the interface
+    // thread's own work is tens of times slower, so there the test only drives the hand-over.
+    if (instrumentedTimeScale() == 1)
+      QVERIFY2(hidden.worstMs >= 0 && hidden.worstMs <= 50, qPrintable(QString("event loop stalled %1 ms").arg(hidden.worstMs)));
     const EventLoopGap shown = luxoSolveGap(WindowMode::Shown);
     qInfo("window shown: longest event-loop gap %lld ms, %d iterates drawn", shown.worstMs, shown.iterates);
     // Drawn iterates: the solve now takes ~1.3 s and live iterates come at most every 250 ms,
