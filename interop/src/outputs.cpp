@@ -49,6 +49,9 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["restoration_steps"] = s.restorationSteps;
   j["restoration_seconds"] = s.restorationSeconds;
   j["polished"] = s.polished;
+  j["interior_point_iterations"] = s.interiorPointIterations;  // after a stall (0: did not run)
+  j["interior_point_seconds"] = s.interiorPointSeconds;
+  j["rescued"] = s.rescued;
   j["solve_seconds"] = s.solveSeconds;
   j["jacobian_seconds"] = s.jacobianSeconds;
   j["linear_solver_seconds"] = s.linearSolverSeconds;

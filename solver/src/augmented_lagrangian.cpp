@@ -110,6 +110,8 @@ std::string SolverOptions::validate() const {
   if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
   if (coldNewtonSteps < 0) return "coldNewtonSteps must not be negative";
   if (stallUpdates < 1) return "stallUpdates must be at least 1";
+  if (interiorPointAfterStallIterations < 1 || interiorPointMaxIterations < 1)
+    return "the interior point's iteration limits must be at least 1";
   return "";
 }
 
@@ -224,13 +226,14 @@ std::string describeViolated(const std::vector<ViolatedConstraint>& violated) {
 // rung creeps (300 steps, 22 s: 1/2 |c|^2 0.0119 -> 0.0114) and stays undecided.
 namespace {
 
-void restorationPhase(SpacetimeProblem& problem, const SolverOptions& options, Clock::time_point deadline,
+// Returns false when the constraints were shown to conflict.
+bool restorationPhase(SpacetimeProblem& problem, const SolverOptions& options, Clock::time_point deadline,
                       SolverSummary* summary) {
   constexpr int kSteps = 15;
   Restoration restoration(problem, options.threads);
   if (!restoration.ready()) {
     summary->reason += ": some of them may conflict";
-    return;
+    return true;
   }
   const SolutionState stalled = problem.state();
   const RestorationResult r = restoration.minimiseViolation(options.tolerance, kSteps, deadline);
@@ -250,6 +253,37 @@ void restorationPhase(SpacetimeProblem& problem, const SolverOptions& options, C
       summary->reason += "; " + r.reason + ", so they are not shown to conflict";
       break;
   }
+  return r.outcome != RestorationResult::Outcome::PositiveMinimum;
+}
+
+// The interior point from a stalled motion (SolverOptions::interiorPointAfterStall), for the rest
+// of the budget. Converged, its KKT point is the result; otherwise the stalled (or restored)
+// motion and the stall's verdict stay, and the reason says what it reached.
+void interiorPointAfterStall(SpacetimeProblem& problem, const SolverOptions& options, Clock::time_point start,
+                             const ProgressCallback& callback, const std::atomic<bool>* cancel,
+                             SolverSummary* summary) {
+  SolverOptions ip = options;
+  ip.method = SolverMethod::InteriorPoint;
+  ip.interiorPointMaxIterations = options.interiorPointAfterStallIterations;
+  ip.spentSeconds = options.spentSeconds + secondsSince(start) / instrumentedTimeScale();
+  if (!(ip.spentSeconds < ip.maxSeconds)) return;
+  const SolutionState stalled = problem.state();
+  const SolverSummary r = solveInteriorPoint(problem, ip, callback, cancel);
+  summary->interiorPointIterations = r.iterations;
+  summary->interiorPointSeconds = r.solveSeconds;
+  summary->jacobianSeconds += r.jacobianSeconds;
+  summary->hessianSeconds += r.hessianSeconds;
+  if (r.converged) {
+    summary->status = SolveStatus::Converged;
+    summary->converged = true;
+    summary->rescued = true;
+    summary->reason = "the augmented Lagrangian stalled (" + summary->reason + "); from its motion the interior point " +
+                      r.reason;
+    return;
+  }
+  problem.restore(stalled);
+  if (r.status == SolveStatus::Cancelled) summary->status = SolveStatus::Cancelled;
+  summary->reason += "; the interior point from there stopped too (" + r.reason + ")";
 }
 
 }  // namespace
@@ -480,7 +514,10 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     // 1/2 |c|^2 1.1e-4 -> 1.0e-4 in 400 more steps). The rung's four phases: 45 steps, 3.5 s.
     const Clock::time_point cap = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                      std::chrono::duration<double>(std::max(1.0, 0.1 * secondsSince(start))));
-    restorationPhase(problem, options, std::min(deadline, cap), &summary);
+    const bool mayHold = restorationPhase(problem, options, std::min(deadline, cap), &summary);
+    if (mayHold && options.interiorPointAfterStall && interiorPointAvailable() && problem.freeEnds().empty() &&
+        !(cancel && cancel->load()))
+      interiorPointAfterStall(problem, options, start, callback, cancel, &summary);
     m = measure(problem);
   }
   if (summary.status == SolveStatus::IterationLimit && m.maxViolation <= options.tolerance)

@@ -29,8 +29,6 @@ using raw::Vec;
 using Ipopt::Index;
 using Ipopt::Number;
 
-constexpr int kMaxIterations = 3000;
-
 // The lower triangle of the Lagrangian's Hessian in a pattern fixed at the start: every pair of
 // tangent columns a kernel's nonlinear inputs read, and the pattern of J_r^T J_r. Each term's
 // dense weighted Hessian and each entry of J_r^T J_r know their slot, so assembly is a scatter.
@@ -301,7 +299,7 @@ bool configure(Ipopt::IpoptApplication& app, const SolverOptions& options) {
   app.Options()->SetNumericValue("tol", 1e-8);
   app.Options()->SetNumericValue("constr_viol_tol", options.tolerance);
   app.Options()->SetNumericValue("acceptable_constr_viol_tol", options.tolerance);
-  app.Options()->SetIntegerValue("max_iter", kMaxIterations);
+  app.Options()->SetIntegerValue("max_iter", options.interiorPointMaxIterations);
   // MUMPS with approximate minimum degree: the shipped jump 9.4 -> 6.6 s against its automatic
   // choice (METIS 9.4 s); the adaptive barrier update takes 88 iterations, the monotone one 170.
   app.Options()->SetIntegerValue("mumps_pivot_order", 0);
@@ -371,7 +369,8 @@ SolverSummary solveInteriorPoint(SpacetimeProblem& problem, const SolverOptions&
                                           "of the violation after " + steps.str());
     case Ipopt::Maximum_Iterations_Exceeded:
       return finish(SolveStatus::IterationLimit,
-                    "reached the limit of " + std::to_string(kMaxIterations) + " interior-point iterations");
+                    "reached the limit of " + std::to_string(options.interiorPointMaxIterations) +
+                        " interior-point iterations");
     case Ipopt::Restoration_Failed:
       return finish(SolveStatus::Stalled, "the restoration phase could not reduce the violation after " + steps.str());
     default: {

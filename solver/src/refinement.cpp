@@ -52,12 +52,13 @@ std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCh
 
 }  // namespace
 
-bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer) {
+bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer,
+                         double growth) {
   *finer = spec;
   finer->samplesPerSegment = std::max(spec.samplesPerSegment, RefinementOptions::kMaxRefinedSamples);
-  const double rate = spec.controlPointsPerSecond * RefinementOptions::kRateGrowth;
-  if (rate > options.maxControlPointsPerSecond * (1 + 1e-9)) return false;
-  finer->controlPointsPerSecond = rate;
+  const double cap = options.maxControlPointsPerSecond;
+  if (spec.controlPointsPerSecond >= cap * (1 - 1e-9)) return false;
+  finer->controlPointsPerSecond = std::min(spec.controlPointsPerSecond * growth, cap);
   return true;
 }
 
@@ -76,7 +77,16 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     attempt.controlPointsPerSecond = spec.controlPointsPerSecond;
     attempt.samplesPerSegment = spec.samplesPerSegment;
     attempt.why = why;
-    const SolverSummary summary = solveSpacetime(*problem, options, callback, cancel);
+    // A stall at the scene's own transcription is refined before anything else: there it is
+    // mostly a transcription too coarse for the task, which the interior point cannot finish
+    // either (the 1.5 m rung at 20 control points per second: 200 IPOPT iterations, 15 s, in
+    // vain). On a refined transcription, or where none is left, the interior point continues.
+    TranscriptionSpec next;
+    SolverOptions levelOptions = options;
+    if (level == 0 && refinement.enabled && refinement.maxRefinements > 0 &&
+        refineTranscription(spec, refinement, &next, RefinementOptions::kStallRateGrowth))
+      levelOptions.interiorPointAfterStall = false;
+    const SolverSummary summary = solveSpacetime(*problem, levelOptions, callback, cancel);
     ValidityReport validity = checkValidity(*problem, 10, cancel);
     const std::vector<ValidityCheck> checks = validityChecklist(validity);
     attempt.status = summary.status;
@@ -94,6 +104,8 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.newtonSteps += summary.newtonSteps;
     total.restorationSteps += summary.restorationSteps;
     total.restorationSeconds += summary.restorationSeconds;
+    total.interiorPointIterations += summary.interiorPointIterations;
+    total.interiorPointSeconds += summary.interiorPointSeconds;
     total.jacobianSeconds += summary.jacobianSeconds;
     total.linearSolverSeconds += summary.linearSolverSeconds;
     const std::string failure = describe(attempt, checks);
@@ -112,7 +124,8 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count() / instrumentedTimeScale();
     TranscriptionSpec finer;
     if (!refinement.enabled || level >= refinement.maxRefinements || !refinable(attempt.status, attempt.valid) ||
-        (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds || !refineTranscription(spec, refinement, &finer))
+        (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds || !refineTranscription(spec, refinement, &finer,
+                            attempt.converged ? RefinementOptions::kRateGrowth : RefinementOptions::kStallRateGrowth))
       break;
     // The next transcription starts from the best motion so far.
     Scene scene = best.problem->scene();
@@ -130,6 +143,10 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // control points per second.
     const bool transferred = problem->initializeFrom(*best.problem) > 0;
     options.warmStart = transferred && best.summary.converged;
+    // Where the augmented Lagrangian stalled and the interior point finished the solve, the
+    // finer transcriptions go to the interior point at once: from the re-fitted motion the
+    // augmented Lagrangian would stall again first.
+    if (summary.rescued) options.method = SolverMethod::InteriorPoint;
     options.spentSeconds = spentBefore + elapsed;
     why = failure;
   }
@@ -139,6 +156,8 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.newtonSteps = total.newtonSteps;
   best.summary.restorationSteps = total.restorationSteps;
   best.summary.restorationSeconds = total.restorationSeconds;
+  best.summary.interiorPointIterations = total.interiorPointIterations;
+  best.summary.interiorPointSeconds = total.interiorPointSeconds;
   best.summary.jacobianSeconds = total.jacobianSeconds;
   best.summary.linearSolverSeconds = total.linearSolverSeconds;
   best.summary.solveSeconds = std::chrono::duration<double>(Clock::now() - start).count();

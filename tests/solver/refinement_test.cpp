@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "../shipped_scene.h"
+#include "solver/interior_point.h"
 #include "solver/refinement.h"
 
 namespace spacetime {
@@ -28,8 +29,15 @@ TEST(Refinement, TheSequenceRaisesSamplesThenTheRateUpToItsCap) {
   spec = finer;
   ASSERT_TRUE(refineTranscription(spec, options, &finer));
   EXPECT_DOUBLE_EQ(finer.controlPointsPerSecond, 45);
-  spec.controlPointsPerSecond = 60;  // 90 > the cap of 80
+  spec.controlPointsPerSecond = 60;  // 90 > the cap of 80: the cap
+  ASSERT_TRUE(refineTranscription(spec, options, &finer));
+  EXPECT_DOUBLE_EQ(finer.controlPointsPerSecond, 80);
+  spec = finer;
   EXPECT_FALSE(refineTranscription(spec, options, &finer));
+  // After a stall the rate triples.
+  spec.controlPointsPerSecond = 20;
+  ASSERT_TRUE(refineTranscription(spec, options, &finer, RefinementOptions::kStallRateGrowth));
+  EXPECT_DOUBLE_EQ(finer.controlPointsPerSecond, 60);
 }
 
 // The shipped particle and jump are valid at their own transcription: one solve, nothing refined.
@@ -70,6 +78,30 @@ TEST(Refinement, TheLongerJumpBecomesValidOnAFinerTranscription) {
   // The refined motion is a better optimum, not only a finer one: the coarse one spent effort on
   // what its transcription could not resolve.
   EXPECT_LT(refined.summary.objective, coarse.summary.objective);
+}
+
+// The ladder's 1.5 m rung from the default guess, as `spacetime-cli solve` runs it: at the
+// scene's 20 control points per second the augmented Lagrangian stalls (the transcription is too
+// coarse for the jump); the stall triples the rate, where the augmented Lagrangian stalls again
+// (violation ~0.05) and the interior point, started from that motion, converges to a motion that
+// passes every validity check (objective 205.96). Without the hand-over every transcription
+// stalls (docs/validation.md).
+TEST(Refinement, TheLadders1_5mJumpIsValidAfterAStallAndTheInteriorPoint) {
+  if (!interiorPointAvailable()) GTEST_SKIP() << "built without IPOPT (coinor-libipopt-dev)";
+  const Scene scene = testing::testScene("ladder/luxo_jump_1.5m.json");
+  SolverOptions options = solverOptionsFor(scene.solver);
+  options.threads = 2;
+  const RefinedSolve r = solveRefined(built(scene), options, RefinementOptions{});
+  ASSERT_TRUE(r.summary.converged) << r.summary.reason;
+  EXPECT_TRUE(r.valid) << r.summary.reason;
+  for (const ValidityCheck& c : validityChecklist(r.validity)) EXPECT_TRUE(c.pass) << c.name << ": " << c.value;
+  ASSERT_GE(r.attempts.size(), 2u);
+  EXPECT_FALSE(r.attempts.front().converged);
+  EXPECT_DOUBLE_EQ(r.attempts[1].controlPointsPerSecond,
+                   scene.transcription.controlPointsPerSecond * RefinementOptions::kStallRateGrowth);
+  EXPECT_TRUE(r.summary.rescued);
+  EXPECT_GT(r.summary.interiorPointIterations, 0);
+  EXPECT_NE(r.summary.reason.find("the augmented Lagrangian stalled"), std::string::npos) << r.summary.reason;
 }
 
 }  // namespace

@@ -79,6 +79,18 @@ struct SolverOptions {
   // cap. The solve stops as Stalled after stallUpdates such multiplier updates in which the
   // violation fell by less than 1 % in all, instead of spending the rest of maxOuterIterations.
   int stallUpdates = 10;
+  // A stall whose restoration phase shows no conflict is handed to the interior point
+  // (interior_point.h, where built; not with free contact ends), from the motion it stalled
+  // at, for the rest of the budget: the augmented Lagrangian's Gauss-Newton inner steps crawl
+  // where an exact-Hessian method with its own multiplier estimates converges (the ladder's
+  // 1.5 m jump at 60 control points per second: stalled at 0.045, then 67 IPOPT iterations to
+  // a valid motion).
+  // It stops after interiorPointAfterStallIterations (converged hand-overs measured: 45-72
+  // iterations; from a motion it cannot finish, such as a transcription too coarse for the
+  // task, it wanders) or at the end of the budget.
+  bool interiorPointAfterStall = true;
+  int interiorPointAfterStallIterations = 200;
+  int interiorPointMaxIterations = 3000;  // IPOPT's max_iter (SolverMethod::InteriorPoint)
 
   std::string validate() const;  // empty if valid, else what is wrong
   // The wall-clock instant a solve started at `start` must stop: maxSeconds less spentSeconds,
@@ -131,6 +143,11 @@ struct SolverSummary {
   int restorationSteps = 0;     // of the restoration phase after a stall (solver/restoration.h)
   double restorationSeconds = 0;
   bool polished = false;        // the result is the Newton polish's KKT point
+  // The interior point after a stall (SolverOptions::interiorPointAfterStall): its IPOPT
+  // iterations and seconds (0 if it did not run), whether it converged.
+  int interiorPointIterations = 0;
+  double interiorPointSeconds = 0;
+  bool rescued = false;
   double solveSeconds = 0;
   double jacobianSeconds = 0;   // Ceres's time in residual and Jacobian evaluation
   double linearSolverSeconds = 0;

@@ -37,6 +37,10 @@ struct RefinementOptions {
   double maxControlPointsPerSecond = 80;   // no refinement beyond this rate
   static constexpr int kMaxRefinedSamples = 8;
   static constexpr double kRateGrowth = 1.5;
+  // After a stall: the task needs a much finer transcription (the ladder's 1.5 m jump stalls at
+  // 20, 30 and 45 control points per second and solves at 60, where 1.5x steps spent the budget
+  // on the intermediate rates).
+  static constexpr double kStallRateGrowth = 3;
 };
 
 // One transcription the solve ran on, and how that solve ended.
@@ -64,8 +68,10 @@ struct RefinedSolve {
   bool valid = false;                         // the kept motion converged and passes every check
 };
 
-// The next finer transcription after `spec`, or false if `options` allow none.
-bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer);
+// The next finer transcription after `spec`: `growth` times its rate, at most the cap, and at
+// least kMaxRefinedSamples; false when its rate is at the cap already.
+bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer,
+                         double growth = RefinementOptions::kRateGrowth);
 
 // Solves `problem` (built from its scene) and refines as above. The progress callback and cancel
 // flag apply to every solve; options.maxSeconds bounds them all together. The returned problem is
