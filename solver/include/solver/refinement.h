@@ -17,6 +17,10 @@
 // budget is spent, or when a solve stops for a reason a finer transcription cannot change
 // (cancelled, out of time, numerical failure, invalid options).
 //
+// A stall triples the rate instead (kStallRateGrowth), and on a refined transcription a stall
+// the restoration phase does not show to conflict goes to the interior point
+// (SolverOptions::interiorPointAfterStall), as do the finer transcriptions after it.
+//
 // The refinement is uniform: every interval gets finer, also where the residual was small.
 // Measured on the jump ladder (tests/scenes/ladder/; docs/validation.md).
 #pragma once
