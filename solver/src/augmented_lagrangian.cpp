@@ -278,7 +278,7 @@ void interiorPointAfterStall(SpacetimeProblem& problem, const SolverOptions& opt
     summary->status = SolveStatus::Converged;
     summary->converged = true;
     summary->rescued = true;
-    summary->reason = "the augmented Lagrangian stalled (" + summary->reason + "); from its motion the interior point " +
+    summary->reason = "the augmented Lagrangian stalled (" + summary->reason + "); the interior point from its motion: " +
                       r.reason;
     return;
   }
