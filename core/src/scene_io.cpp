@@ -514,7 +514,7 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("transcription")) {
     const json& t = root["transcription"];
-    r.allowKeys(t, "transcription", {"controlPointsPerSecond", "samplesPerSegment"});
+    r.allowKeys(t, "transcription", {"controlPointsPerSecond", "samplesPerSegment", "legBubbles"});
     if (t.contains("controlPointsPerSecond"))
       s.transcription.controlPointsPerSecond =
           r.positive(t["controlPointsPerSecond"], "transcription.controlPointsPerSecond");
@@ -522,6 +522,7 @@ Scene readScene(const Reader& r, const json& root) {
       s.transcription.samplesPerSegment =
           r.integer(t["samplesPerSegment"], "transcription.samplesPerSegment", 1,
                     TranscriptionSpec::kMaxSamplesPerSegment);
+    if (t.contains("legBubbles")) s.transcription.legBubbles = r.boolean(t["legBubbles"], "transcription.legBubbles");
   }
   if (root.contains("solver")) {
     const json& t = root["solver"];
@@ -824,6 +825,7 @@ std::string sceneToJson(const Scene& s) {
   root["ground"] = {{"enabled", s.groundEnabled}, {"height", s.groundHeight}};
   root["transcription"] = {{"controlPointsPerSecond", s.transcription.controlPointsPerSecond},
                            {"samplesPerSegment", s.transcription.samplesPerSegment}};
+  if (s.transcription.legBubbles) root["transcription"]["legBubbles"] = true;
   root["solver"] = {{"method", s.solver.method},
                     {"maxOuterIterations", s.solver.maxOuterIterations},
                     {"maxInnerIterations", s.solver.maxInnerIterations},

@@ -133,7 +133,7 @@ std::vector<double> gltfKeyTimes(const SpacetimeProblem& problem, double rateHz)
   for (int k = 0; k <= intervals; ++k) grid.push_back(scene.startTime + (scene.endTime - scene.startTime) * k / intervals);
   for (const CharacterVariables& c : problem.characters())
     for (const DofGroup& g : c.groups) {
-      if (g.hermite) grid.insert(grid.end(), g.breaks.begin(), g.breaks.end());
+      if (g.hasBubbles()) grid.insert(grid.end(), g.breaks.begin(), g.breaks.end());
       else
         for (int k = 0; k <= g.spline.segmentCount(); ++k) grid.push_back(g.spline.start() + k * g.spline.knotSpacing());
     }

@@ -79,11 +79,13 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   // The transcription of the motion written, and every one the solve tried (refinement.h).
   const TranscriptionSpec& spec = problem.scene().transcription;
   j["transcription"] = {{"control_points_per_second", spec.controlPointsPerSecond},
-                        {"samples_per_segment", spec.samplesPerSegment}};
+                        {"samples_per_segment", spec.samplesPerSegment},
+                        {"leg_bubbles", spec.legBubbles}};
   json refinement = json::array();
   for (const TranscriptionAttempt& a : attempts)
     refinement.push_back({{"control_points_per_second", a.controlPointsPerSecond},
                           {"samples_per_segment", a.samplesPerSegment},
+                          {"leg_bubbles", a.legBubbles},
                           {"why", a.why},
                           {"status", toString(a.status)},
                           {"converged", a.converged},

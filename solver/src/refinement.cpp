@@ -31,16 +31,23 @@ bool atLeastAsGood(const TranscriptionAttempt& a, const TranscriptionAttempt& b)
   return rank(a) > 0 || !(a.maxViolation > b.maxViolation);
 }
 
+// "20 control points per second, s = 6" (and ", with leg bubbles").
+std::string resolution(const TranscriptionAttempt& a) {
+  std::ostringstream s;
+  s << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
+    << (a.legBubbles ? ", with leg bubbles" : "");
+  return s.str();
+}
+
 // Why the next transcription is tried: how this one's solve ended, or its first failing check.
 std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCheck>& checks) {
   std::ostringstream why;
   if (!a.converged) {
-    why << "the solve at " << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
-        << " stopped " << toString(a.status) << " (violation " << a.maxViolation << ")";
+    why << "the solve at " << resolution(a) << " stopped " << toString(a.status) << " (violation " << a.maxViolation
+        << ")";
     return why.str();
   }
-  why << "the motion at " << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
-      << " failed";
+  why << "the motion at " << resolution(a) << " failed";
   for (const ValidityCheck& c : checks)
     if (!c.pass) {
       why << " " << c.name;
@@ -48,6 +55,17 @@ std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCh
       break;
     }
   return why.str();
+}
+
+// Whether leg bubbles would add unknowns to this scene (a character standing on more feet
+// than its root meets): then a stall is first answered with them, at the same rate.
+bool legBubblesApply(const Scene& scene) {
+  if (scene.transcription.legBubbles) return false;
+  Scene with = scene;
+  with.transcription.legBubbles = true;
+  std::string error;
+  const std::unique_ptr<SpacetimeProblem> p = SpacetimeProblem::build(with, &error);
+  return p && p->hasLegBubbles();
 }
 
 }  // namespace
@@ -76,6 +94,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     const TranscriptionSpec spec = problem->scene().transcription;
     attempt.controlPointsPerSecond = spec.controlPointsPerSecond;
     attempt.samplesPerSegment = spec.samplesPerSegment;
+    attempt.legBubbles = spec.legBubbles;
     attempt.why = why;
     // A stall at the scene's own transcription is refined before anything else: there it is
     // mostly a transcription too coarse for the task, which the interior point cannot finish
@@ -122,11 +141,21 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
 
     // In budget seconds (SolverOptions::deadlineFrom stretches budgets by the time scale).
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count() / instrumentedTimeScale();
-    TranscriptionSpec finer;
     if (!refinement.enabled || level >= refinement.maxRefinements || !refinable(attempt.status, attempt.valid) ||
-        (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds || !refineTranscription(spec, refinement, &finer,
-                            attempt.converged ? RefinementOptions::kRateGrowth : RefinementOptions::kStallRateGrowth))
+        (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds)
       break;
+    // After a stall, a character standing on several legs first gets leg bubbles at the same
+    // rate: its legs could not follow their feet (the table squat of
+    // tests/solver/leg_bubbles_test.cpp stalls at any rate without them).
+    TranscriptionSpec finer = spec;
+    finer.legBubbles = true;
+    Scene probe = best.problem->scene();
+    probe.transcription = spec;
+    if (attempt.converged || !legBubblesApply(probe)) {
+      if (!refineTranscription(spec, refinement, &finer,
+                               attempt.converged ? RefinementOptions::kRateGrowth : RefinementOptions::kStallRateGrowth))
+        break;
+    }
     // The next transcription starts from the best motion so far.
     Scene scene = best.problem->scene();
     scene.transcription = finer;
@@ -166,7 +195,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     std::ostringstream note;
     note << "; " << best.attempts.size() - 1 << " finer transcription" << (best.attempts.size() > 2 ? "s" : "")
          << " tried, the motion kept is at " << kept.controlPointsPerSecond << " control points per second, s = "
-         << kept.samplesPerSegment;
+         << kept.samplesPerSegment << (kept.legBubbles ? ", with leg bubbles" : "");
     best.summary.reason += note.str();
   }
   return best;

@@ -90,10 +90,8 @@ std::vector<LowestPointFeature> inPlane(const std::vector<LowestPointFeature>& f
   return out;
 }
 
-// The order-th derivative in u of the root's bubble j, 16 u^2 (1-u)^2 (2u-1)^j (1 at the
-// middle for j = 0; zero with its slope at both ends).
-double bubble(int j, double u, int order) {
-  std::vector<double> c = {0, 0, 16, -32, 16};  // ascending powers of u
+// The order-th derivative in u of base(u) (2u-1)^j, base given by its ascending coefficients.
+double bubbleShape(std::vector<double> c, int j, double u, int order) {
   for (int i = 0; i < j; ++i) {                 // times (2u - 1)
     std::vector<double> next(c.size() + 1, 0.0);
     for (size_t k = 0; k < c.size(); ++k) {
@@ -109,6 +107,16 @@ double bubble(int j, double u, int order) {
   double v = 0;
   for (size_t k = c.size(); k-- > 0;) v = v * u + c[k];
   return v;
+}
+
+// The order-th derivative in u of the root's bubble j, 16 u^2 (1-u)^2 (2u-1)^j (1 at the
+// middle for j = 0; zero with its slope at both ends).
+double bubble(int j, double u, int order) { return bubbleShape({0, 0, 16, -32, 16}, j, u, order); }
+
+// A leg bubble (DofGroup::legBubbles), 64 u^3 (1-u)^3 (2u-1)^j: zero with its first two
+// derivatives at both ends, so the joint it adds to stays C2.
+double legBubble(int j, double u, int order) {
+  return bubbleShape({0, 0, 0, 64, -192, 192, -64}, j, u, order);
 }
 
 // A B-spline group's four control points at basis b, with the given weights.
@@ -239,12 +247,28 @@ std::vector<std::pair<double, double>> SpacetimeProblem::flightPhases(int c) con
 
 GroupBasis SpacetimeProblem::groupBasis(int c, const DofGroup& g, double t, int order,
                                         Side side) const {
+  if (g.legBubbles) return legBubbleBasis(g, hermiteInterval(c, g, t, side), t, order);
   if (!g.hermite) {
     const BSplineBasis b = g.spline.basis(t);
     return splineBasis(g, b, b.derivative(order));
   }
   const int k = hermiteInterval(c, g, t, side);
   return hermiteBasis(g, k, g.breaks[k], g.breaks[k + 1], t, order, 0, 0, 0, nullptr);
+}
+
+GroupBasis SpacetimeProblem::legBubbleBasis(const DofGroup& g, int k, double t, int order) const {
+  GroupBasis gb;
+  const double a = g.breaks[k], h = g.breaks[k + 1] - a;
+  if (h < kTimeTolerance) return gb;
+  const double u = std::clamp((t - a) / h, 0.0, 1.0);
+  for (int j = 0; j < g.bubblesIn(k); ++j) {
+    gb.start[gb.count] = g.bubbleStart(k);
+    gb.size[gb.count] = g.bubbleBlockSize(k);
+    gb.index[gb.count] = j * static_cast<int>(g.dofs.size());
+    gb.weight[gb.count] = legBubble(j, u, order) * std::pow(h, -order);
+    ++gb.count;
+  }
+  return gb;
 }
 
 int SpacetimeProblem::hermiteInterval(int c, const DofGroup& g, double t, Side side) const {
@@ -332,6 +356,10 @@ const DofGroup* SpacetimeProblem::rootGroup(int c) const {
 GroupBasis SpacetimeProblem::groupBasisAt(int c, const DofGroup& g, const TimeRef& r, double T,
                                           int order, GroupBasis* slope) const {
   const double t = r.at(T);
+  if (g.legBubbles) {  // only on characters without free ends (leg_bubbles.cpp): never moving
+    *slope = GroupBasis{};
+    return groupBasis(c, g, t, order, r.rootSide);
+  }
   if (!g.hermite) {
     const BSplineBasis b = g.spline.basis(t);
     std::array<double, 4> next{};  // cubic: the fourth derivative vanishes
@@ -373,7 +401,7 @@ void SpacetimeProblem::addMotionInputs(InputMap& in, int c, const TimeRef& r, do
     if (n == 0) continue;
     GroupBasis slope;
     const GroupBasis gb = groupBasisAt(c, g, r, T, order, &slope);
-    if (!g.hermite) {
+    if (!g.hasBubbles()) {
       // The parameter blocks must not change with T: register every control point the moving
       // time can reach, in order, before the ones in use.
       const int lo = g.spline.basis(r.at(e.lower)).first, hi = g.spline.basis(r.at(e.upper)).first;
@@ -563,6 +591,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     contacts_.push_back(cv);
   }
   if (!addFreeEnds(error, &size)) return false;
+  layoutLegBubbles(&size);
   layoutHeldStances();
   x_.assign(size, 0.0);
   initialGuess();
@@ -1038,7 +1067,7 @@ void SpacetimeProblem::initialGuess() {
     }
     for (const DofGroup& grp : cv.groups) {
       const int size = static_cast<int>(grp.dofs.size());
-      if (size == 0) continue;
+      if (size == 0 || grp.legBubbles) continue;  // leg bubbles start at zero
       Eigen::MatrixXd groupValues(values.rows(), size);
       for (int k = 0; k < size; ++k) groupValues.col(k) = values.col(grp.dofs[k]);
       // Fit the B-spline through the target, then read the Hermite data off that fit.
@@ -1172,7 +1201,8 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
     ++matched;
     for (const DofGroup& g : cv.groups) {
       const int n = static_cast<int>(g.dofs.size());
-      if (n == 0) continue;
+      // Leg bubbles start at zero: the joints' B-splines are fitted to the whole previous motion.
+      if (n == 0 || g.legBubbles) continue;
       if (!g.hermite) {
         std::vector<double> times;
         const int samples = 8 * spline.segmentCount();

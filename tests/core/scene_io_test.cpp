@@ -52,18 +52,27 @@ TEST(SceneIo, FreeContactEndRoundTrips) {
 }
 
 // The solver method and the frame rate a scene asks for are saved and read back.
-TEST(SceneIo, SolverMethodAndFrameRateRoundTrip) {
+TEST(SceneIo, SolverMethodFrameRateAndLegBubblesRoundTrip) {
   const SceneLoadResult r = loadSceneFile(std::string(kScenes) + "/luxo_jump.json");
   ASSERT_TRUE(r.scene) << r.error;
   EXPECT_EQ(r.scene->solver.method, "al");  // the default
+  EXPECT_FALSE(r.scene->transcription.legBubbles);  // the default
   Scene scene = *r.scene;
   scene.solver.method = "ipopt";
   EXPECT_EQ(scene.frameRate, 24);  // the default
   scene.frameRate = 30;
+  scene.transcription.legBubbles = true;
   const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
   ASSERT_TRUE(again.scene) << again.error;
   EXPECT_EQ(again.scene->solver.method, "ipopt");
   EXPECT_EQ(again.scene->frameRate, 30);
+  EXPECT_TRUE(again.scene->transcription.legBubbles);
+  std::string text = sceneToJson(scene);
+  const size_t flag = text.find("true", text.find("\"legBubbles\""));
+  ASSERT_NE(flag, std::string::npos);
+  text.replace(flag, 4, "1");
+  const std::string error = parseScene(text, "x.json").error;
+  EXPECT_NE(error.find("transcription.legBubbles"), std::string::npos) << error;
 }
 
 // A joint axis beyond the loader's magnitude bound is refused, naming the component (its

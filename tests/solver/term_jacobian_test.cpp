@@ -1,7 +1,8 @@
 // Every term's Jacobian (Jets through the dynamics, chained through the spline basis and the
 // augmented-Lagrangian transform) against central finite differences, at a perturbed point
 // of each shipped scene with non-zero multipliers, so every kernel kind is exercised (and of the
-// Luxo jump landing on two contact terms at once, for the shared impact).
+// Luxo jump landing on two contact terms at once, for the shared impact; of the biped with leg
+// bubbles).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -27,6 +28,7 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
   const std::string variant = param.size() > name.size() ? param.substr(name.size() + 1) : "";
   Scene scene = testing::shippedScene(name);
   if (variant == "split") scene = testing::withSplitLanding(scene);
+  if (variant == "legs") scene.transcription.legBubbles = true;  // the right leg's (leg_bubbles.cpp)
   if (variant == "free") {
     scene.transcription.samplesPerSegment = 3;
     for (TermSpec& t : scene.terms)
@@ -96,7 +98,7 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
 INSTANTIATE_TEST_SUITE_P(Scenes, TermJacobians,
                          ::testing::Values("luxo_jump.json", "luxo_3d.json", "particle_gravity.json",
                                            "luxo_jump.json:split", "luxo_jump.json:free",
-                                           "luxo_3d.json:free"));
+                                           "luxo_3d.json:free", "biped_jump.json:legs"));
 
 }  // namespace
 }  // namespace spacetime

@@ -725,11 +725,15 @@ class EditorTest : public QObject {
     QVERIFY(samples);
     samples->setCurrentIndex(3);
     QCOMPARE(doc.scene().transcription.samplesPerSegment, 4);
+    auto* legs = qobject_cast<QCheckBox*>(form->editor("Leg bubbles"));
+    QVERIFY(legs);
+    legs->setChecked(true);
+    QVERIFY(doc.scene().transcription.legBubbles);
     auto* method = qobject_cast<QComboBox*>(form->editor("Solver method"));
     QVERIFY(method);
     method->setCurrentIndex(1);
     QCOMPARE(doc.scene().solver.method, std::string("ipopt"));
-    QCOMPARE(doc.undoStack()->count(), commands + 7);
+    QCOMPARE(doc.undoStack()->count(), commands + 8);
     end->setValue(-5);  // before the start: kept after it
     QVERIFY(doc.scene().endTime > doc.scene().startTime);
     QCOMPARE(end->value(), doc.scene().endTime);

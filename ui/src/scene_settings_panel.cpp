@@ -50,6 +50,10 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
   for (int k = 1; k <= TranscriptionSpec::kMaxSamplesPerSegment; ++k) samples << QString::number(k);
   f.addChoice(tr("Samples per segment"), samples, [](const Scene& s) { return s.transcription.samplesPerSegment - 1; },
               [](Scene& s, int v) { s.transcription.samplesPerSegment = v + 1; });
+  // Extra unknowns for characters on several feet (solver/leg_bubbles.cpp); the solve also turns
+  // them on by itself after a stall.
+  f.addBool(tr("Leg bubbles"), [](const Scene& s) { return s.transcription.legBubbles; },
+            [](Scene& s, bool v) { s.transcription.legBubbles = v; });
   // SolverSpec::kMethods in order: "al", "ipopt".
   f.addChoice(tr("Solver method"), {tr("augmented Lagrangian"), tr("interior point (IPOPT)")},
               [](const Scene& s) { return s.solver.method == "ipopt" ? 1 : 0; },

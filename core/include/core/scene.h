@@ -152,6 +152,10 @@ struct TranscriptionSpec {
   static constexpr int kMaxSamplesPerSegment = 8;
   double controlPointsPerSecond = 20;
   int samplesPerSegment = 2;
+  // Leg bubbles (solver/leg_bubbles.cpp): extra unknowns on the legs of a character standing on
+  // several feet, so that each leg can follow its foot between the knots. The refinement turns
+  // them on after a stall where they apply.
+  bool legBubbles = false;
 };
 
 struct SolverSpec {

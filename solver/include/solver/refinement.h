@@ -51,6 +51,7 @@ struct RefinementOptions {
 struct TranscriptionAttempt {
   double controlPointsPerSecond = 0;
   int samplesPerSegment = 0;
+  bool legBubbles = false;       // with leg bubbles (TranscriptionSpec::legBubbles)
   std::string why;               // why this transcription was tried ("the scene's", or the failure)
   SolveStatus status = SolveStatus::InvalidOptions;
   bool converged = false;

@@ -67,13 +67,24 @@ enum class Side { Contacts, Before, After };
 //   breakpoints, as it must where a contact begins or ends. The interval that starts a flight
 //   after a lift-off has s - 1 bubbles and s + 1 Radau nodes, the first at the lift-off read on
 //   the flight side (Transcription::flightStarts): physics holds from the flight's first instant.
+//
+// - Leg bubbles (legBubbles): extra shapes added to some actuated dofs inside stances on several
+//   legs (leg_bubbles.cpp). A contact that does not hold the root is kept still by zero
+//   acceleration of its points at every collocation node; the root's coefficients meet those rows
+//   for as many contacts as it has dofs, and each further contact on a leg of its own gets s - 1
+//   bubbles 64 u^3 (1-u)^3 (2u-1)^j per interval on that leg's joints, so that the leg has as many
+//   unknowns per interval as its foot has rows there. These dofs keep their B-spline (in group 0);
+//   the bubbles add to it, vanish with their first two derivatives at the interval's ends (the
+//   joint stays C2) and are zero outside those intervals.
 struct DofGroup {
   bool hermite = false;
+  bool legBubbles = false;
   UniformBSpline spline;         // B-spline group
-  std::vector<double> breaks;    // Hermite group: breakpoints
+  std::vector<double> breaks;    // Hermite and leg-bubble groups: breakpoints (the root's)
   int bubbles = 0;               // Hermite group: interior coefficients per interval and dof
   // Hermite: intervals with one more bubble (1), where a flight starts after a lift-off and the
-  // transcription collocates s + 1 Radau nodes (Sample::after); empty: none.
+  // transcription collocates s + 1 Radau nodes (Sample::after); empty: none. Leg bubbles: each
+  // interval's bubble count (s - 1 inside the leg's stances, 0 elsewhere).
   std::vector<int> extraBubble;
   std::vector<int> bubbleStarts;  // interval k's bubbles start at x[bubbleStarts[k]]
   std::vector<int> dofs;         // dof indices in this group
@@ -91,10 +102,12 @@ struct DofGroup {
   bool beforeImpact(size_t k) const {
     return k + 1 < breaks.size() && std::abs(breaks[k + 1] - breaks[k]) < kTimeTolerance;
   }
-  int blockSize() const { return (hermite ? 2 : 1) * static_cast<int>(dofs.size()); }
+  int blockSize() const { return legBubbles ? 0 : (hermite ? 2 : 1) * static_cast<int>(dofs.size()); }
   int blockCount() const {
-    return hermite ? static_cast<int>(breaks.size()) : spline.controlPointCount();
+    return hermite || legBubbles ? static_cast<int>(breaks.size()) : spline.controlPointCount();
   }
+  // Whether the group is laid out on breakpoint intervals with bubbles (Hermite or leg bubbles).
+  bool hasBubbles() const { return hermite || legBubbles; }
   int bubblesIn(int k) const {
     return bubbles + (k < static_cast<int>(extraBubble.size()) ? extraBubble[k] : 0);
   }
@@ -206,6 +219,8 @@ class SpacetimeProblem {
   const std::vector<CharacterVariables>& characters() const { return characters_; }
   const std::vector<ContactVariables>& contacts() const { return contacts_; }
   const std::vector<FreeEnd>& freeEnds() const { return freeEnds_; }
+  // Whether some character has leg bubbles (DofGroup::legBubbles).
+  bool hasLegBubbles() const;
   // Moves the problem's times (root breakpoints, samples and their weights, contact ends and
   // sample times) to the free ends' current values; residuals need no update.
   void syncFreeEnds();
@@ -285,6 +300,9 @@ class SpacetimeProblem {
   // Every body's geometry above the ground outside its contacts (SolverSpec::bodiesAboveGround).
   void addGroundClearances();
   void addJointSpeedLimits();
+  // Leg bubbles (leg_bubbles.cpp, see DofGroup): appends each character's leg-bubble groups,
+  // laid out from *size on.
+  void layoutLegBubbles(int* size);
   // The time reference of t for character c (see TimeRef): moving inside a free end's window.
   // The root interval is the one `side` picks at a breakpoint (Side::After: a flight's first
   // instant reads the interval that starts there).
@@ -305,6 +323,8 @@ class SpacetimeProblem {
   // The basis of a group at t, on the root interval `side` picks (see Side).
   GroupBasis groupBasis(int character, const DofGroup& g, double t, int order,
                         Side side = Side::Contacts) const;
+  // A leg-bubble group's basis on its interval k at t (empty where it has no bubbles).
+  GroupBasis legBubbleBasis(const DofGroup& g, int k, double t, int order) const;
   // The root interval holding t (the rule of groupBasis).
   int hermiteInterval(int character, const DofGroup& g, double t, Side side) const;
   // The basis of a Hermite group's interval k = [a, b] at t, and in `slope` its derivative in
