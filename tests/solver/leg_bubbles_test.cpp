@@ -3,7 +3,7 @@
 // without leg bubbles the other foot's rows per interval outnumber what its leg's B-splines can
 // meet, and a squat - the body lowered, moved and tilted between two equal poses - stalls at any
 // rate. With them the hind leg gets s - 1 bubbles per stance interval and joint, the joints stay
-// C2, and the squat solves to a motion that passes every validity check.
+// C2, the squat solves to a motion that passes every validity check, and so does a 0.3 m hop.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -139,6 +139,35 @@ TEST(LegBubbles, AQuadrupedSquatOnBothFeetStallsWithoutThemAndIsValidWithThem) {
               "%.1f s, dense residual %.3g of weight\n",
               r.attempts[0].maxViolation, r.attempts[0].seconds, r.attempts[1].objective, r.attempts[1].seconds,
               v.maxUnactuatedResidualDense);
+}
+
+// The same quadruped hops 0.3 m forward from its default guess, refined as the CLI refines: the
+// scene's transcription stalls, leg bubbles at the same rate come close (the point feet slip
+// between the nodes), and 1.5x the rate with the same s is valid.
+TEST(LegBubbles, AQuadrupedHopIsValidAfterTheRefinementAddsThem) {
+  const Scene scene = testing::testScene("legs/planar_quadruped_hop.json");
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  SolverOptions options = solverOptionsFor(scene.solver);
+  options.threads = 2;
+  const RefinedSolve r = solveRefined(std::move(problem), options, RefinementOptions{});
+  ASSERT_TRUE(r.valid) << r.summary.reason;
+  ASSERT_GE(r.attempts.size(), 2u);
+  EXPECT_FALSE(r.attempts[0].converged);
+  EXPECT_TRUE(r.attempts[1].legBubbles);
+  const TranscriptionSpec& kept = r.problem->scene().transcription;
+  EXPECT_TRUE(kept.legBubbles);
+  EXPECT_EQ(kept.samplesPerSegment, scene.transcription.samplesPerSegment);
+  for (const ValidityCheck& c : validityChecklist(r.validity))
+    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " " << c.unit << " (limit " << c.limit << ")";
+  // Both feet leave the ground and it lands 0.3 m ahead.
+  EXPECT_NEAR(r.problem->jointState(0, 1.2, 0)[0], 0.3, 1e-6);
+  EXPECT_GT(r.problem->jointState(0, 0.62, 0)[1], r.problem->jointState(0, 0.0, 0)[1]);
+  std::printf("quadruped hop: valid at %g control points per second, s = %d, with leg bubbles; objective %.6g, "
+              "%zu transcriptions, %.1f s\n",
+              kept.controlPointsPerSecond, kept.samplesPerSegment, r.summary.objective, r.attempts.size(),
+              r.summary.solveSeconds);
 }
 
 }  // namespace

@@ -1112,29 +1112,36 @@ class EditorTest : public QObject {
     QVERIFY(glm::length(lo - glm::vec3(0.1f, 0.0f, -0.2f)) < 1e-6f && glm::length(hi - glm::vec3(0.3f, 0.15f, 0.2f)) < 1e-6f);
   }
 
-  // The builder's Planar biped preset, chosen from its menu on an empty scene, solves in the
-  // editor to a motion the Validity panel calls physically valid: a 9-dof character standing on
-  // two feet with two-point contacts, which no lamp preset exercises.
-  void bipedPresetSolvesValid() {
+  // A builder preset, chosen from its menu on an empty scene, solves in the editor to a motion
+  // the Validity panel calls physically valid.
+  void presetSolvesValid(const QString& name, size_t bodies) {
     MainWindow w;
     w.solveOnOpen = false;
     w.document()->reset(emptyScene(), {});
-    QAction* biped = nullptr;
+    QAction* preset = nullptr;
     for (QToolButton* button : w.builder()->findChildren<QToolButton*>())
       if (button->text() == "Presets" && button->menu())
         for (QAction* a : button->menu()->actions())
-          if (a->text() == "Planar biped") biped = a;
-    QVERIFY(biped);
-    biped->trigger();
+          if (a->text() == name) preset = a;
+    QVERIFY(preset);
+    preset->trigger();
     const Scene& scene = w.document()->scene();
     QCOMPARE(scene.characters.size(), size_t(1));
-    QCOMPARE(scene.characters[0].bodies.size(), size_t(7));
+    QCOMPARE(scene.characters[0].bodies.size(), bodies);
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(scaled(240000)));
     QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
     QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
   }
+
+  // The Planar biped: a 9-dof character standing on two feet with two-point contacts, which no
+  // lamp preset exercises.
+  void bipedPresetSolvesValid() { presetSolvesValid("Planar biped", 7); }
+
+  // The Planar quadruped: front and hind legs on point feet, a hop that needs leg bubbles (its
+  // scene asks for them; solver/leg_bubbles.cpp).
+  void quadrupedPresetSolvesValid() { presetSolvesValid("Planar quadruped", 5); }
 
   // A jumping creature made only through the editor's panels, as a user would, no JSON: File >
   // New; the Scene panel's clip end; the builder's character, three links added on each other's

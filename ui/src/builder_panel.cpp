@@ -82,6 +82,7 @@ BuilderPanel::BuilderPanel(Document* doc, QWidget* parent) : QWidget(parent), do
   menu->addAction(tr("Planar Luxo"), this, [this] { applyPreset(":/scenes/luxo_jump.json"); });
   menu->addAction(tr("3D Luxo"), this, [this] { applyPreset(":/scenes/luxo_3d.json"); });
   menu->addAction(tr("Planar biped"), this, [this] { applyPreset(":/scenes/biped_jump.json"); });
+  menu->addAction(tr("Planar quadruped"), this, [this] { applyPreset(":/scenes/quadruped_hop.json"); });
   presets->setMenu(menu);
   buttons->addWidget(presets);
   buttons->addStretch();

@@ -1,7 +1,8 @@
 // The actor builder: the characters' body trees, and a form for the selected character (id,
 // root type) or body (id, joint type and axis, offset, limits, geometry and size, mass or
 // density, actuated or not). Add, remove and rename bodies; start from a preset (particle,
-// planar Luxo, 3D Luxo). Every change is an undo command; the viewport previews it live.
+// planar Luxo, 3D Luxo, planar biped, planar quadruped). Every change is an undo command; the
+// viewport previews it live.
 #pragma once
 
 #include <QTreeWidget>
