@@ -50,13 +50,11 @@ int pointsRank(const ContactPoints& points, bool planar) {
   return rank;
 }
 
-// The actuated dofs between a body and the root, root side first.
+// The actuated dofs between a body and the root, sorted (every joint has one dof).
 std::vector<int> legDofs(const Model<double>& model, int body) {
   std::vector<int> dofs;
   for (int b = body; b >= 0; b = model.bodies[b].parent)
-    if (model.bodies[b].actuated && model.bodies[b].dofIndex >= 0)
-      for (int d = 0; d < model.dofCount(); ++d)
-        if (model.dofBody[d] == b) dofs.push_back(d);
+    if (model.bodies[b].actuated && model.bodies[b].dofIndex >= 0) dofs.push_back(model.bodies[b].dofIndex);
   std::sort(dofs.begin(), dofs.end());
   return dofs;
 }
@@ -69,43 +67,54 @@ bool SpacetimeProblem::hasLegBubbles() const {
   });
 }
 
-void SpacetimeProblem::layoutLegBubbles(int* size) {
+bool SpacetimeProblem::legBubblesWouldApply() const {
+  for (size_t c = 0; c < characters_.size(); ++c)
+    if (!legBubbleCounts(static_cast<int>(c)).empty()) return true;
+  return false;
+}
+
+std::map<std::vector<int>, std::vector<int>> SpacetimeProblem::legBubbleCounts(int c) const {
+  std::map<std::vector<int>, std::vector<int>> counts;  // a leg's dofs -> bubbles per interval
   const int bubbles = scene_.transcription.samplesPerSegment - 1;
-  if (!scene_.transcription.legBubbles || bubbles < 1) return;
-  for (size_t c = 0; c < characters_.size(); ++c) {
-    CharacterVariables& cv = characters_[c];
-    const int ci = static_cast<int>(c);
-    const DofGroup* root = rootGroup(ci);
-    if (!root) continue;
-    const bool freeEnd = std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
-      return ct.character == ci && ct.freeEnd >= 0;
-    });
-    if (freeEnd) continue;
-    const std::vector<double> breaks = root->breaks;
-    const int intervals = static_cast<int>(breaks.size()) - 1;
-    std::map<std::vector<int>, std::vector<int>> counts;  // a leg's dofs -> bubbles per interval
-    for (int k = 0; k < intervals; ++k) {
-      if (breaks[k + 1] - breaks[k] < kTimeTolerance) continue;  // an impact's repeated breakpoint
-      int capacity = static_cast<int>(root->dofs.size());
-      std::vector<int> used;
-      for (int j : activeContacts(ci, 0.5 * (breaks[k] + breaks[k + 1]))) {
-        const ContactVariables& ct = contacts_[j];
-        if (ct.holdsRoot || ct.freeEnd >= 0) continue;
-        const int rows = pointsRank(ct.points, cv.forceDims == 2);
-        std::vector<int> leg = legDofs(*cv.model, ct.points.body);
-        if (rows <= capacity) {  // the root meets this contact
-          capacity -= rows;
-          used.insert(used.end(), leg.begin(), leg.end());
-          continue;
-        }
-        std::erase_if(leg, [&](int d) { return std::find(used.begin(), used.end(), d) != used.end(); });
-        if (static_cast<int>(leg.size()) < rows) continue;  // no leg of its own: rows stay as they are
+  const CharacterVariables& cv = characters_[c];
+  const DofGroup* root = rootGroup(c);
+  const bool freeEnd = std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
+    return ct.character == c && ct.freeEnd >= 0;
+  });
+  if (bubbles < 1 || !root || freeEnd) return counts;
+  const std::vector<double>& breaks = root->breaks;
+  const int intervals = static_cast<int>(breaks.size()) - 1;
+  for (int k = 0; k < intervals; ++k) {
+    if (breaks[k + 1] - breaks[k] < kTimeTolerance) continue;  // an impact's repeated breakpoint
+    int capacity = static_cast<int>(root->dofs.size());
+    std::vector<int> used;
+    for (int j : activeContacts(c, 0.5 * (breaks[k] + breaks[k + 1]))) {
+      const ContactVariables& ct = contacts_[j];
+      if (ct.holdsRoot || ct.freeEnd >= 0) continue;
+      const int rows = pointsRank(ct.points, cv.forceDims == 2);
+      std::vector<int> leg = legDofs(*cv.model, ct.points.body);
+      if (rows <= capacity) {  // the root meets this contact
+        capacity -= rows;
         used.insert(used.end(), leg.begin(), leg.end());
-        std::vector<int>& perInterval = counts[leg];
-        perInterval.resize(intervals, 0);
-        perInterval[k] = bubbles;
+        continue;
       }
+      std::erase_if(leg, [&](int d) { return std::find(used.begin(), used.end(), d) != used.end(); });
+      if (static_cast<int>(leg.size()) < rows) continue;  // no leg of its own: rows stay as they are
+      used.insert(used.end(), leg.begin(), leg.end());
+      std::vector<int>& perInterval = counts[leg];
+      perInterval.resize(intervals, 0);
+      perInterval[k] = bubbles;
     }
+  }
+  return counts;
+}
+
+void SpacetimeProblem::layoutLegBubbles(int* size) {
+  if (!scene_.transcription.legBubbles) return;
+  for (size_t c = 0; c < characters_.size(); ++c) {
+    const std::map<std::vector<int>, std::vector<int>> counts = legBubbleCounts(static_cast<int>(c));
+    if (counts.empty()) continue;
+    const std::vector<double> breaks = rootGroup(static_cast<int>(c))->breaks;  // before groups grow
     for (const auto& [dofs, perInterval] : counts) {
       DofGroup g;
       g.legBubbles = true;
@@ -115,7 +124,7 @@ void SpacetimeProblem::layoutLegBubbles(int* size) {
       g.offset = g.bubbleOffset = *size;
       g.layoutBubbles();
       *size += g.variableCount();
-      cv.groups.push_back(g);
+      characters_[c].groups.push_back(g);
     }
   }
 }

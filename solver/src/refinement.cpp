@@ -57,17 +57,6 @@ std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCh
   return why.str();
 }
 
-// Whether leg bubbles would add unknowns to this scene (a character standing on more feet
-// than its root meets): then a stall is first answered with them, at the same rate.
-bool legBubblesApply(const Scene& scene) {
-  if (scene.transcription.legBubbles) return false;
-  Scene with = scene;
-  with.transcription.legBubbles = true;
-  std::string error;
-  const std::unique_ptr<SpacetimeProblem> p = SpacetimeProblem::build(with, &error);
-  return p && p->hasLegBubbles();
-}
-
 }  // namespace
 
 bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer,
@@ -145,13 +134,12 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
         (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds)
       break;
     // After a stall, a character standing on several legs first gets leg bubbles at the same
-    // rate: its legs could not follow their feet (the table squat of
+    // rate: its legs could not follow their feet (the quadruped squat of
     // tests/solver/leg_bubbles_test.cpp stalls at any rate without them).
+    const SpacetimeProblem& solved = problem ? *problem : *best.problem;  // this level's
     TranscriptionSpec finer = spec;
     finer.legBubbles = true;
-    Scene probe = best.problem->scene();
-    probe.transcription = spec;
-    if (attempt.converged || !legBubblesApply(probe)) {
+    if (attempt.converged || spec.legBubbles || !solved.legBubblesWouldApply()) {
       // With leg bubbles the rate grows by half and s stays: s - 1 = 7 bubbles per interval at
       // s = 8 move unseen between the nodes (the planar quadruped's hop: 20/6 slips 0.36 mm
       // between them, 30/6 is valid, 60/8 leaves 0.24 x the weight unexplained).
@@ -197,11 +185,9 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.linearSolverSeconds = total.linearSolverSeconds;
   best.summary.solveSeconds = std::chrono::duration<double>(Clock::now() - start).count();
   if (best.attempts.size() > 1) {
-    const TranscriptionSpec& kept = best.problem->scene().transcription;
     std::ostringstream note;
     note << "; " << best.attempts.size() - 1 << " finer transcription" << (best.attempts.size() > 2 ? "s" : "")
-         << " tried, the motion kept is at " << kept.controlPointsPerSecond << " control points per second, s = "
-         << kept.samplesPerSegment << (kept.legBubbles ? ", with leg bubbles" : "");
+         << " tried, the motion kept is at " << resolution(best.attempts[bestAttempt]);
     best.summary.reason += note.str();
   }
   return best;

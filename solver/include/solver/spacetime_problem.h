@@ -221,6 +221,9 @@ class SpacetimeProblem {
   const std::vector<FreeEnd>& freeEnds() const { return freeEnds_; }
   // Whether some character has leg bubbles (DofGroup::legBubbles).
   bool hasLegBubbles() const;
+  // Whether leg bubbles would add unknowns to this problem's transcription (a character standing
+  // on more feet than its root meets), whether or not the scene asks for them.
+  bool legBubblesWouldApply() const;
   // Moves the problem's times (root breakpoints, samples and their weights, contact ends and
   // sample times) to the free ends' current values; residuals need no update.
   void syncFreeEnds();
@@ -301,8 +304,10 @@ class SpacetimeProblem {
   void addGroundClearances();
   void addJointSpeedLimits();
   // Leg bubbles (leg_bubbles.cpp, see DofGroup): appends each character's leg-bubble groups,
-  // laid out from *size on.
+  // laid out from *size on, when the scene asks for them.
   void layoutLegBubbles(int* size);
+  // Character c's legs that get bubbles (their dofs) and each one's bubble count per root interval.
+  std::map<std::vector<int>, std::vector<int>> legBubbleCounts(int c) const;
   // The time reference of t for character c (see TimeRef): moving inside a free end's window.
   // The root interval is the one `side` picks at a breakpoint (Side::After: a flight's first
   // instant reads the interval that starts there).
