@@ -103,6 +103,7 @@ std::string SolverOptions::validate() const {
   if (!(nearFeasible >= 0) || !(nearFeasiblePenalty >= initialPenalty))
     return "nearFeasible must be >= 0 and nearFeasiblePenalty >= initialPenalty";
   if (!(warmRestartPenalty > 0)) return "warmRestartPenalty must be > 0";
+  if (!(penaltyPerObjective >= 0)) return "penaltyPerObjective must be >= 0";
   if (!(maxSeconds > 0)) return "maxSeconds must be > 0";
   if (threads < 1) return "threads must be at least 1";
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
@@ -300,10 +301,8 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   }
   if (options.method == SolverMethod::InteriorPoint) return solveInteriorPoint(problem, options, callback, cancel);
   AugmentedLagrangianState& al = problem.augmentedLagrangian();
-  if (!options.warmStart || !(al.rho > 0)) {
-    std::fill(al.lambda.begin(), al.lambda.end(), 0.0);
-    al.rho = options.initialPenalty;
-  }
+  const bool coldStart = !options.warmStart || !(al.rho > 0);
+  if (coldStart) std::fill(al.lambda.begin(), al.lambda.end(), 0.0);
 
   ceres::Solver::Options co;
   co.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -330,8 +329,10 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   ProgressForwarder forwarder(problem, callback, cancel, start, deadline);
   co.callbacks.push_back(&forwarder);
 
-  SolutionState lastGood = problem.state();
   ProblemMeasures m = measure(problem);
+  if (coldStart)
+    al.rho = std::min(options.maxPenalty, std::max(options.initialPenalty, options.penaltyPerObjective * m.objective));
+  SolutionState lastGood = problem.state();
   double previousViolation = m.maxViolation;
   double stallReference = m.maxViolation;  // the violation when the current stall began
   int stalledUpdates = 0;

@@ -194,6 +194,7 @@ BENCHMARK_CAPTURE(BM_Solve, luxo_3d_2_threads, std::string("luxo_3d.json"), 0, t
 BENCHMARK_CAPTURE(BM_Solve, luxo_power_formula_2_threads, std::string("luxo_power_formula.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_heavy_2_threads, std::string("luxo_heavy.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, biped_jump_2_threads, std::string("biped_jump.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_Solve, humanoid_jump_2_threads, std::string("humanoid_jump.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 // The ladder's rungs that end valid (the longer ones stall for about a minute: scripts/measure.sh
 // runs them through the CLI).
 BENCHMARK_CAPTURE(BM_Ladder, jump_0_3m, std::string("luxo_jump_0.3m.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

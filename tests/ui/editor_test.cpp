@@ -1143,6 +1143,10 @@ class EditorTest : public QObject {
   // scene asks for them; solver/leg_bubbles.cpp).
   void quadrupedPresetSolvesValid() { presetSolvesValid("Planar quadruped", 5); }
 
+  // The 3D humanoid: a floating root with six dofs, head, arms and legs (10 bodies, 14 dofs),
+  // heavy enough that the augmented Lagrangian's starting penalty must follow its objective.
+  void humanoidPresetSolvesValid() { presetSolvesValid("3D humanoid", 10); }
+
   // A jumping creature made only through the editor's panels, as a user would, no JSON: File >
   // New; the Scene panel's clip end; the builder's character, three links added on each other's
   // tips with their sizes, masses and limits typed in; K at both ends with the key values typed

@@ -83,6 +83,7 @@ BuilderPanel::BuilderPanel(Document* doc, QWidget* parent) : QWidget(parent), do
   menu->addAction(tr("3D Luxo"), this, [this] { applyPreset(":/scenes/luxo_3d.json"); });
   menu->addAction(tr("Planar biped"), this, [this] { applyPreset(":/scenes/biped_jump.json"); });
   menu->addAction(tr("Planar quadruped"), this, [this] { applyPreset(":/scenes/quadruped_hop.json"); });
+  menu->addAction(tr("3D humanoid"), this, [this] { applyPreset(":/scenes/humanoid_jump.json"); });
   presets->setMenu(menu);
   buttons->addWidget(presets);
   buttons->addStretch();
