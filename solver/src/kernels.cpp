@@ -364,19 +364,43 @@ ContactPointMotionKernel::ContactPointMotionKernel(std::shared_ptr<const Model<d
     : model_(std::move(model)), contact_(contact), forceDims_(forceDims), order_(order) {
   label_ = std::move(label);
   inputs_ = (order_ + 1) * model_->dofCount();
-  kinds_.assign(forceDims_ * contact_.points.size(), RowKind::Equality);
+  // The body's rotations that move some point: the row space of the stacked [p_i - p_0]x (in the
+  // plane only the turn about z). Their components of the angular velocity or acceleration,
+  // with the first point's, are as many rows as the points' rigid motion has rank.
+  const Eigen::Vector3d& p0 = contact_.points.front();
+  for (const Eigen::Vector3d& p : contact_.points) reach_ = std::max(reach_, (p - p0).norm());
+  if (reach_ > 1e-9) {
+    if (forceDims_ == 2) {
+      turns_.push_back(Eigen::Vector3d::UnitZ());
+    } else {
+      Eigen::MatrixXd cross(3 * contact_.points.size(), 3);
+      for (size_t i = 0; i < contact_.points.size(); ++i) {
+        const Eigen::Vector3d d = contact_.points[i] - p0;
+        cross.block<3, 3>(3 * i, 0) << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+      }
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(cross, Eigen::ComputeFullV);
+      for (int k = 0; k < 3; ++k)
+        if (svd.singularValues()[k] > 1e-9 * reach_) turns_.push_back(svd.matrixV().col(k));
+    }
+  }
+  kinds_.assign(forceDims_ + turns_.size(), RowKind::Equality);
 }
 
+// Rows: the first point's world velocity or acceleration (forceDims), then reach times the body's
+// angular velocity or acceleration along each turn (body frame), in the same units. Zero exactly
+// when every point is still, as the points' own rows were, without their redundant ones (four
+// points of a sole gave 12 rows of rank 6 per node, which stalled the 3D humanoid).
 template <class T>
 void ContactPointMotionKernel::compute(const T* z, T* rows) const {
   const int n = model_->dofCount();
   Data<T>& data = scratchData<T>(*model_);
   forwardKinematics(*model_, data, z, z + n, order_ == 2 ? z + 2 * n : static_cast<const T*>(nullptr));
+  const Eigen::Vector3d& p0 = contact_.points.front();
+  const Vec3<T> v = order_ == 2 ? pointAcceleration(data, contact_.body, p0) : pointVelocity(data, contact_.body, p0);
   int r = 0;
-  for (const Eigen::Vector3d& p : contact_.points) {
-    const Vec3<T> v = order_ == 2 ? pointAcceleration(data, contact_.body, p) : pointVelocity(data, contact_.body, p);
-    for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
-  }
+  for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
+  const Vec3<T>& w = order_ == 2 ? data.a[contact_.body].ang : data.v[contact_.body].ang;
+  for (const Eigen::Vector3d& e : turns_) rows[r++] = reach_ * (e.x() * w[0] + e.y() * w[1] + e.z() * w[2]);
 }
 SPACETIME_DEFINE_EVALUATORS(ContactPointMotionKernel)
 

@@ -64,7 +64,7 @@ std::unique_ptr<SpacetimeProblem> solveTwoFootedJump(const char* file) {
 TEST(ShippedBiped, JumpsForwardAndPassesEveryCheck) { solveTwoFootedJump("biped_jump.json"); }
 
 // The 3D humanoid (resources/scenes/humanoid_jump.json, the builder's "3D humanoid"): a floating
-// root with six dofs, legs and arms turning in the sagittal plane, two-point feet. The task is
+// root with six dofs, legs and arms turning in the sagittal plane, four-point soles. The task is
 // mirror-symmetric, so its optimum is too: the root's sideways dofs (z, yaw, roll) stay at zero
 // and the legs move alike, though nothing in the problem ties them.
 TEST(ShippedHumanoid, JumpsForwardSymmetricallyAndPassesEveryCheck) {
@@ -82,8 +82,30 @@ TEST(ShippedHumanoid, JumpsForwardSymmetricallyAndPassesEveryCheck) {
       asymmetry = std::max(asymmetry, std::abs(q[dof(left)] - q[dof(right)]));
   }
   std::printf("humanoid: largest sideways root dof %.3g, largest left-right difference %.3g rad\n", sideways, asymmetry);
-  EXPECT_LT(sideways, 1e-4);
-  EXPECT_LT(asymmetry, 1e-4);
+  EXPECT_LT(sideways, 1e-3);
+  EXPECT_LT(asymmetry, 1e-3);
+}
+
+// The biped of biped_jump.json with a 4 kg head fixed 0.62 m above its hips
+// (tests/scenes/biped_heavy_head.json): its effort at the default guess is 3763, against the
+// biped's 2901. The augmented Lagrangian's starting penalty follows that (SolverOptions::
+// penaltyPerObjective); started at a fixed 100 the solve rose off its start key while the effort
+// dominated and stalled at a violation of 0.13 (1910 iterations, 202 s).
+TEST(ShippedBiped, WithAHeavyHeadItStillConvergesFromTheDefaultGuess) {
+  const Scene scene = testing::testScene("biped_heavy_head.json");
+  std::string error;
+  const auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  SolverOptions options = solverOptionsFor(scene.solver);
+  options.threads = 2;
+  const SolverSummary s = solveSpacetime(*problem, options);
+  ASSERT_TRUE(s.converged) << s.reason;
+  for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
+    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " " << c.unit << " (limit " << c.limit << ")";
+  // On its start key (the stalled solve had lifted the pelvis 0.2 m off it).
+  EXPECT_NEAR(problem->jointState(0, 0, 0)[1], 0.7520660495122983, 1e-6);
+  std::printf("biped with a heavy head: objective %.6g, %d iterations + %d Newton steps, %.1f s\n", s.objective,
+              s.iterations, s.newtonSteps, s.solveSeconds);
 }
 
 }  // namespace

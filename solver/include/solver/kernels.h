@@ -179,7 +179,7 @@ class ContactAnchorKernel : public Kernel {
 
 // Contact points are at rest (order 1: their world velocity is zero) or do not accelerate
 // (order 2: their world acceleration is zero, RBDA eq. 2.42 via pointAcceleration). z = [q, qd]
-// or [q, qd, qdd]; forceDims rows per point (x, y in the plane). Keeps the points of a contact
+// or [q, qd, qdd]; as many rows as the points' rigid motion has rank. Keeps the points of a contact
 // that does not hold the root still between its anchor and its lift-off (SpacetimeProblem).
 class ContactPointMotionKernel : public Kernel {
  public:
@@ -194,6 +194,8 @@ class ContactPointMotionKernel : public Kernel {
   ContactPoints contact_;
   int forceDims_;
   int order_;
+  double reach_ = 0;                    // largest distance of a point from the first
+  std::vector<Eigen::Vector3d> turns_;  // body-frame rotation axes that move some point
 };
 
 // The contact forces of one sample lie in the friction cone (the ground only pushes). Forces
