@@ -364,25 +364,10 @@ ContactPointMotionKernel::ContactPointMotionKernel(std::shared_ptr<const Model<d
     : model_(std::move(model)), contact_(contact), forceDims_(forceDims), order_(order) {
   label_ = std::move(label);
   inputs_ = (order_ + 1) * model_->dofCount();
-  // The body's rotations that move some point: the row space of the stacked [p_i - p_0]x (in the
-  // plane only the turn about z). Their components of the angular velocity or acceleration,
-  // with the first point's, are as many rows as the points' rigid motion has rank.
-  const Eigen::Vector3d& p0 = contact_.points.front();
-  for (const Eigen::Vector3d& p : contact_.points) reach_ = std::max(reach_, (p - p0).norm());
-  if (reach_ > 1e-9) {
-    if (forceDims_ == 2) {
-      turns_.push_back(Eigen::Vector3d::UnitZ());
-    } else {
-      Eigen::MatrixXd cross(3 * contact_.points.size(), 3);
-      for (size_t i = 0; i < contact_.points.size(); ++i) {
-        const Eigen::Vector3d d = contact_.points[i] - p0;
-        cross.block<3, 3>(3 * i, 0) << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
-      }
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(cross, Eigen::ComputeFullV);
-      for (int k = 0; k < 3; ++k)
-        if (svd.singularValues()[k] > 1e-9 * reach_) turns_.push_back(svd.matrixV().col(k));
-    }
-  }
+  // One row per independent motion of the points: the first point's, then the body's turns that
+  // move some point (contactTurns).
+  reach_ = contactReach(contact_);
+  turns_ = contactTurns(contact_, forceDims_ == 2);
   kinds_.assign(forceDims_ + turns_.size(), RowKind::Equality);
 }
 

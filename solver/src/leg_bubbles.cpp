@@ -20,7 +20,6 @@
 // contact gets bubbles on the joints between its body and the root not already used by an
 // earlier contact of the interval, if there are at least as many as its rows. Characters with a
 // free contact end get none (their breakpoints move; the moving time map has no bubbles).
-#include <Eigen/SVD>
 #include <algorithm>
 #include <map>
 
@@ -29,25 +28,10 @@
 namespace spacetime {
 namespace {
 
-// The rank of a contact's points' rigid motion: how many independent still-rows per node.
+// The rank of a contact's points' rigid motion: how many independent still-rows per node (the
+// rows ContactPointMotionKernel writes).
 int pointsRank(const ContactPoints& points, bool planar) {
-  const int m = static_cast<int>(points.points.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero((planar ? 2 : 3) * m, planar ? 3 : 6);
-  for (int p = 0; p < m; ++p) {
-    const Eigen::Vector3d& x = points.points[p];
-    if (planar) {  // velocity of (x, y) under (vx, vy, wz)
-      A.block<2, 3>(2 * p, 0) << 1, 0, -x.y(), 0, 1, x.x();
-    } else {  // v + w x p
-      A.block<3, 3>(3 * p, 0).setIdentity();
-      A.block<3, 3>(3 * p, 3) << 0, x.z(), -x.y(), -x.z(), 0, x.x(), x.y(), -x.x(), 0;
-    }
-  }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A);
-  const Eigen::VectorXd sv = svd.singularValues();
-  int rank = 0;
-  for (int i = 0; i < sv.size(); ++i)
-    if (sv[i] > 1e-9 * std::max(1.0, sv[0])) ++rank;
-  return rank;
+  return (planar ? 2 : 3) + static_cast<int>(contactTurns(points, planar).size());
 }
 
 // The actuated dofs between a body and the root, sorted (every joint has one dof).

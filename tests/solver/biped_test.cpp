@@ -1,9 +1,9 @@
 // The two-footed examples. The planar biped (resources/scenes/biped_jump.json, also the
-// builder's "Planar biped" preset): a 9-dof character whose root is the pelvis and whose two feet each stand on a
-// two-point contact - contacts on bodies other than the root, unlike the lamps. From its default
-// guess it must jump 0.3 m forward with both feet off the ground and pass every check of the
-// validity report (the unactuated residual on the dense grid, the forward simulation of the
-// flight, pushing contacts inside their cones, every body above the ground).
+// builder's "Planar biped" preset): a 9-dof character whose root is the pelvis and whose two
+// feet each stand on a two-point contact - contacts on bodies other than the root, unlike the
+// lamps. From its default guess it must jump 0.3 m forward with both feet off the ground and pass
+// every check of the validity report (the unactuated residual on the dense grid, the forward
+// simulation of the flight, pushing contacts inside their cones, every body above the ground).
 #include <gtest/gtest.h>
 
 #include <algorithm>

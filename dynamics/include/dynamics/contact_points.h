@@ -14,6 +14,13 @@ struct ContactPoints {
   std::vector<Eigen::Vector3d> points;  // body frame
 };
 
+// The body's rotations that move some of the points: unit axes in the body frame spanning the
+// row space of the stacked [p_i - p_0]x (in the plane, z once two points differ in x or y). The points'
+// rigid motion has rank forceDims + their count: the first point's motion and these turns.
+std::vector<Eigen::Vector3d> contactTurns(const ContactPoints& contact, bool planar);
+// The largest distance of a point from the first.
+double contactReach(const ContactPoints& contact);
+
 // The point forces given by `forces` (laid out as above), applied at the body points.
 template <class T>
 std::vector<PointForce<T>> contactPointForces(const std::vector<ContactPoints>& contacts,

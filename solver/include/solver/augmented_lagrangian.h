@@ -33,11 +33,10 @@ struct SolverOptions {
   // starting point where that is larger. The objective (effort, N^2 m^2 s) grows with the square
   // of a character's weight and size while the constraint rows are scaled (metres, radians,
   // fractions of the weight), so a fixed starting penalty weighs the constraints less the heavier
-  // the character. At 100 the biped with a 4 kg head (objective 3763 at the default guess)
-  // stalled at a violation of 0.2, the motion lifted off its start key while the effort
-  // dominated; from 130, 200 and 400 it converged to the same optimum (2537.963). With the
-  // objective's tenth the 3D humanoid (8820 at the default guess) is valid in 36 s (1 thread),
-  // stalled at 100; the lamps (objective 0.05-136 there) keep 100.
+  // the character. At 100 the biped with a 4 kg head (tests/scenes/biped_heavy_head.json,
+  // objective 3763 at the default guess) lifted off its start key while the effort dominated and
+  // stalled at a violation of 0.13; from 376 it converges (2537.963). The lamps (objective
+  // 0.05-136 there) keep 100 (docs/design.md, Solver item 1).
   double initialPenalty = SolverSpec::kMinPenalty;
   double penaltyPerObjective = 0.1;
   double penaltyGrowth = 10;     // rho *= growth when the violation did not shrink enough
