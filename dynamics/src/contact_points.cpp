@@ -1,6 +1,8 @@
 // The rigid-motion structure of a contact's points (dynamics/contact_points.h): which of the
-// body's rotations move them. The solver keeps a contact still with one row per independent
-// motion (ContactPointMotionKernel) and counts those rows when it lays out leg bubbles.
+// body's rotations move them, and which points' heights decide the others'. The solver keeps a
+// contact still with one row per independent motion (ContactPointMotionKernel, ImpactKernel),
+// counts those rows when it lays out leg bubbles, and puts a contact on the ground with one
+// height row per independent point (ContactAnchorKernel).
 #include "dynamics/contact_points.h"
 
 #include <algorithm>
@@ -34,6 +36,24 @@ std::vector<Eigen::Vector3d> contactTurns(const ContactPoints& contact, bool pla
   for (int k = 0; k < 3; ++k)
     if (svd.singularValues()[k] > 1e-9 * reach) turns.push_back(svd.matrixV().col(k));
   return turns;
+}
+
+std::vector<int> heightPoints(const ContactPoints& contact, bool planar) {
+  std::vector<int> points;
+  if (contact.points.empty()) return points;
+  points.push_back(0);
+  const double reach = contactReach(contact);
+  std::vector<Eigen::Vector3d> basis;  // orthonormal, spanning the offsets taken
+  for (size_t i = 1; i < contact.points.size(); ++i) {
+    Eigen::Vector3d d = contact.points[i] - contact.points.front();
+    if (planar) d.z() = 0;  // a turn about z moves a point's height by its x and y only
+    for (const Eigen::Vector3d& e : basis) d -= e.dot(d) * e;
+    if (d.norm() > 1e-9 * reach) {
+      basis.push_back(d.normalized());
+      points.push_back(static_cast<int>(i));
+    }
+  }
+  return points;
 }
 
 }  // namespace spacetime

@@ -81,6 +81,13 @@ bool SpacetimeProblem::physicsAt(int character, const Sample& s) const {
   });
 }
 
+bool SpacetimeProblem::rootHeldAt(int character, double t) const {
+  return std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
+    return ct.holdsRoot && ct.character == character && t >= ct.start - kTimeTolerance &&
+           t <= ct.end + kTimeTolerance;
+  });
+}
+
 void SpacetimeProblem::layoutHeldStances() {
   for (size_t c = 0; c < characters_.size(); ++c)
     for (DofGroup& g : characters_[c].groups) {

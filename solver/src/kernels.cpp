@@ -335,57 +335,63 @@ SPACETIME_DEFINE_EVALUATORS(PinKernel)
 // --- ContactAnchorKernel -----------------------------------------------------------------
 
 ContactAnchorKernel::ContactAnchorKernel(std::shared_ptr<const Model<double>> model,
-                                         const ContactPoints& contact, double groundHeight,
-                                         std::string label)
-    : model_(std::move(model)), contact_(contact), ground_(groundHeight) {
+                                         const ContactPoints& contact, int forceDims,
+                                         double groundHeight, std::string label)
+    : model_(std::move(model)), contact_(contact), heightPoints_(heightPoints(contact, forceDims == 2)),
+      ground_(groundHeight) {
   label_ = std::move(label);
   inputs_ = model_->dofCount() + 2 * static_cast<int>(contact_.points.size());
-  kinds_.assign(3 * contact_.points.size(), RowKind::Equality);
+  kinds_.assign(2 * contact_.points.size() + heightPoints_.size(), RowKind::Equality);
 }
 
 template <class T>
 void ContactAnchorKernel::compute(const T* z, T* rows) const {
   const Transform<T> X = bodyPose(*model_, z, contact_.body);
   const T* anchors = z + model_->dofCount();
-  for (size_t i = 0; i < contact_.points.size(); ++i) {
+  const size_t n = contact_.points.size();
+  for (size_t i = 0; i < n; ++i) {
     const Vec3<T> p = pointPosition(X, contact_.points[i]);
-    rows[3 * i + 0] = p.x() - anchors[2 * i];
-    rows[3 * i + 1] = p.y() - ground_;
-    rows[3 * i + 2] = p.z() - anchors[2 * i + 1];
+    rows[2 * i + 0] = p.x() - anchors[2 * i];
+    rows[2 * i + 1] = p.z() - anchors[2 * i + 1];
   }
+  for (size_t k = 0; k < heightPoints_.size(); ++k)
+    rows[2 * n + k] = pointPosition(X, contact_.points[heightPoints_[k]]).y() - ground_;
 }
 SPACETIME_DEFINE_EVALUATORS(ContactAnchorKernel)
+
+// --- ContactStillRows ---------------------------------------------------------------------
+
+ContactStillRows::ContactStillRows(ContactPoints contact, int forceDims)
+    : contact_(std::move(contact)), forceDims_(forceDims), reach_(contactReach(contact_)),
+      turns_(contactTurns(contact_, forceDims == 2)) {}
+
+template <class T>
+T* ContactStillRows::write(const Data<T>& data, int order, T* rows) const {
+  const Eigen::Vector3d& p0 = contact_.points.front();
+  const Vec3<T> v = order == 2 ? pointAcceleration(data, contact_.body, p0) : pointVelocity(data, contact_.body, p0);
+  for (int k = 0; k < forceDims_; ++k) *rows++ = v[k];
+  const Vec3<T>& w = order == 2 ? data.a[contact_.body].ang : data.v[contact_.body].ang;
+  for (const Eigen::Vector3d& e : turns_) *rows++ = reach_ * (e.x() * w[0] + e.y() * w[1] + e.z() * w[2]);
+  return rows;
+}
 
 // --- ContactPointMotionKernel ------------------------------------------------------------
 
 ContactPointMotionKernel::ContactPointMotionKernel(std::shared_ptr<const Model<double>> model,
                                                    const ContactPoints& contact, int forceDims,
                                                    int order, std::string label)
-    : model_(std::move(model)), contact_(contact), forceDims_(forceDims), order_(order) {
+    : model_(std::move(model)), still_(contact, forceDims), order_(order) {
   label_ = std::move(label);
   inputs_ = (order_ + 1) * model_->dofCount();
-  // One row per independent motion of the points: the first point's, then the body's turns that
-  // move some point (contactTurns).
-  reach_ = contactReach(contact_);
-  turns_ = contactTurns(contact_, forceDims_ == 2);
-  kinds_.assign(forceDims_ + turns_.size(), RowKind::Equality);
+  kinds_.assign(still_.count(), RowKind::Equality);
 }
 
-// Rows: the first point's world velocity or acceleration (forceDims), then reach times the body's
-// angular velocity or acceleration along each turn (body frame), in the same units. Zero exactly
-// when every point is still, as the points' own rows were, without their redundant ones (four
-// points of a sole gave 12 rows of rank 6 per node, which stalled the 3D humanoid).
 template <class T>
 void ContactPointMotionKernel::compute(const T* z, T* rows) const {
   const int n = model_->dofCount();
   Data<T>& data = scratchData<T>(*model_);
   forwardKinematics(*model_, data, z, z + n, order_ == 2 ? z + 2 * n : static_cast<const T*>(nullptr));
-  const Eigen::Vector3d& p0 = contact_.points.front();
-  const Vec3<T> v = order_ == 2 ? pointAcceleration(data, contact_.body, p0) : pointVelocity(data, contact_.body, p0);
-  int r = 0;
-  for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
-  const Vec3<T>& w = order_ == 2 ? data.a[contact_.body].ang : data.v[contact_.body].ang;
-  for (const Eigen::Vector3d& e : turns_) rows[r++] = reach_ * (e.x() * w[0] + e.y() * w[1] + e.z() * w[2]);
+  still_.write(data, order_, rows);
 }
 SPACETIME_DEFINE_EVALUATORS(ContactPointMotionKernel)
 
@@ -419,21 +425,27 @@ SPACETIME_DEFINE_EVALUATORS(FrictionConeKernel)
 // --- ImpactKernel ------------------------------------------------------------------------
 
 ImpactKernel::ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
-                           int forceDims, double impulseScale, double torqueWeight,
-                           std::string label)
+                           const std::vector<char>& held, int forceDims, double impulseScale,
+                           double torqueWeight, std::string label)
     : model_(std::move(model)), contacts_(std::move(contacts)), forceDims_(forceDims),
       impulseScale_(impulseScale), sqrtTorqueWeight_(std::sqrt(torqueWeight)) {
   label_ = std::move(label);
   const int n = model_->dofCount();
   size_t points = 0;
-  for (const ContactPoints& c : contacts_) points += c.points.size();
+  size_t stillRows = 0;
+  for (size_t c = 0; c < contacts_.size(); ++c) {
+    points += contacts_[c].points.size();
+    if (held[c]) continue;
+    still_.emplace_back(contacts_[c], forceDims_);
+    stillRows += still_.back().count();
+  }
   inputs_ = 4 * n + forceDims_ * static_cast<int>(points);
   for (int d = 0; d < n; ++d)
     (model_->bodies[model_->dofBody[d]].actuated ? actuated_ : unactuated_).push_back(d);
   parts_.insert(parts_.end(), unactuated_.size(), Part::Continuity);
   parts_.insert(parts_.end(), unactuated_.size(), Part::Balance);
   parts_.insert(parts_.end(), actuated_.size(), Part::JointImpulse);
-  parts_.insert(parts_.end(), forceDims_ * points, Part::PostVelocity);
+  parts_.insert(parts_.end(), stillRows, Part::PostVelocity);
   for (Part p : parts_)
     kinds_.push_back(p == Part::JointImpulse ? RowKind::Objective : RowKind::Equality);
 }
@@ -456,11 +468,8 @@ void ImpactKernel::compute(const T* z, T* rows) const {
   for (int d : unactuated_) rows[r++] = impulse[d] * impulseScale_;
   for (int d : actuated_) rows[r++] = impulse[d] * sqrtTorqueWeight_;
   forwardKinematics(*model_, data, qPlus, qdPlus, none);
-  for (const ContactPoints& c : contacts_)
-    for (const Eigen::Vector3d& p : c.points) {
-      const Vec3<T> v = pointVelocity(data, c.body, p);
-      for (int k = 0; k < forceDims_; ++k) rows[r++] = v[k];
-    }
+  T* next = rows + r;
+  for (const ContactStillRows& still : still_) next = still.write(data, 1, next);
 }
 SPACETIME_DEFINE_EVALUATORS(ImpactKernel)
 

@@ -663,8 +663,12 @@ bool SpacetimeProblem::assemble(std::string* error) {
       case TermKind::Rest: {
         if (!checkOutsideWindows(t.time, label, error)) return false;
         if (t.body.empty()) {
+          // A held stance keeps the root at rest already.
+          std::vector<int> held;
+          if (const DofGroup* root = rootGroup(ci); root && rootHeldAt(ci, t.time)) held = root->dofs;
           std::vector<std::pair<int, double>> targets;
-          for (int d = 0; d < cv.dofs; ++d) targets.emplace_back(d, 0.0);
+          for (int d = 0; d < cv.dofs; ++d)
+            if (std::find(held.begin(), held.end(), d) == held.end()) targets.emplace_back(d, 0.0);
           addAt(std::make_shared<TargetKernel>(cv.dofs, targets, at(label, t.time)), t.time, {1});
         } else {
           addAt(std::make_shared<BodyRestKernel>(cv.model, cv.model->bodyIndex(t.body), at(label, t.time)),
@@ -748,7 +752,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     for (double time : ct.holdsRoot || stillByAcceleration ? std::vector<double>{ct.times.front()} : ct.times) {
       const TimeRef r = timeRef(ct.character, time);
       const int c = ct.character;
-      addResidualAt(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, scene_.groundHeight,
+      addResidualAt(std::make_shared<ContactAnchorKernel>(cv.model, ct.points, ct.forceDims, scene_.groundHeight,
                                                           at(label + " anchor", time)),
                     r.event, [this, c, r, jj](InputMap& in, double T) {
                       addMotionInputs(in, c, r, T, 0);
@@ -856,13 +860,15 @@ void SpacetimeProblem::addImpactTerms(int j) {
     addMotionInputs(in, ct.character, t, 1, Side::Before);
     addMotionInputs(in, ct.character, t, 1);
     std::vector<ContactPoints> points;
+    std::vector<char> held;
     std::string names = label;
     for (int k : group) {
       addBlockInputs(in, contacts_[k].impulseOffset, contacts_[k].blockSize());
       points.push_back(contacts_[k].points);
+      held.push_back(contacts_[k].holdsRoot);
       if (k != j) names += " and '" + scene_.terms[contacts_[k].term].id + "'";
     }
-    addResidual(std::make_shared<ImpactKernel>(cv.model, points, ct.forceDims, impulseScale,
+    addResidual(std::make_shared<ImpactKernel>(cv.model, points, held, ct.forceDims, impulseScale,
                                                scene_.objective.effort / h, at(names + " impact", t)),
                 in);
   }

@@ -2,8 +2,11 @@
 // augmented-Lagrangian transform) against central finite differences, at a perturbed point
 // of each shipped scene with non-zero multipliers, so every kernel kind is exercised (and of the
 // Luxo jump landing on two contact terms at once, for the shared impact; of the biped with leg
-// bubbles).
+// bubbles). And every term's equality rows independent of each other, so the constraint Jacobian
+// has no redundant rows by construction (what a KKT system needs).
 #include <gtest/gtest.h>
+
+#include <Eigen/QR>
 
 #include <random>
 #include <set>
@@ -99,6 +102,66 @@ INSTANTIATE_TEST_SUITE_P(Scenes, TermJacobians,
                          ::testing::Values("luxo_jump.json", "luxo_3d.json", "particle_gravity.json",
                                            "luxo_jump.json:split", "luxo_jump.json:free",
                                            "luxo_3d.json:free", "biped_jump.json:legs"));
+
+// Within each term the equality rows' Jacobian (with respect to the variables it touches, at a
+// perturbed default guess) has full row rank. A contact's points move rigidly, so rows per point
+// are dependent: two points in the plane have velocities of rank 3, a flat sole of four points
+// heights of rank 3 and velocities of rank 6. Such rows stalled the humanoid and leave the Newton
+// polish's and IPOPT's KKT systems singular.
+class TermRows : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(TermRows, EqualityRowsOfEachTermAreIndependent) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene(GetParam()), &error);
+  ASSERT_TRUE(problem) << error;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (double& x : problem->variables()) x += noise(rng);
+  problem->augmentedLagrangian().raw = true;  // the rows themselves
+  int checkedRows = 0;
+  std::set<std::string> contactKinds;
+  for (const TermResidual* res : problem->residuals()) {
+    const std::vector<RowKind>& kinds = res->kernel().rowKinds();
+    std::vector<int> equalities;
+    for (size_t r = 0; r < kinds.size(); ++r)
+      if (kinds[r] == RowKind::Equality) equalities.push_back(static_cast<int>(r));
+    // Two feet landing together can repeat each other: the humanoid's legs turn only about z, so
+    // both say the pelvis does not roll or yaw. That dependence is the character's, not a term's.
+    if (equalities.empty() || res->kernel().label().find("' and '") != std::string::npos) continue;
+    const int m = res->num_residuals();
+    const auto& sizes = res->parameter_block_sizes();
+    std::vector<const double*> params(res->blocks().begin(), res->blocks().end());
+    std::vector<std::vector<double>> jac(sizes.size());
+    std::vector<double*> jacPtr;
+    int columns = 0;
+    for (size_t b = 0; b < sizes.size(); ++b) {
+      jac[b].resize(m * sizes[b]);
+      jacPtr.push_back(jac[b].data());
+      columns += sizes[b];
+    }
+    std::vector<double> rows(m);
+    ASSERT_TRUE(res->Evaluate(params.data(), rows.data(), jacPtr.data()));
+    Eigen::MatrixXd J(equalities.size(), columns);
+    for (size_t i = 0; i < equalities.size(); ++i)
+      for (size_t b = 0, c = 0; b < sizes.size(); c += sizes[b], ++b)
+        for (int k = 0; k < sizes[b]; ++k) J(i, c + k) = jac[b][equalities[i] * sizes[b] + k];
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J.transpose());
+    qr.setThreshold(1e-10);
+    EXPECT_EQ(qr.rank(), J.rows()) << res->kernel().label() << ": " << J.rows() << " equality rows";
+    checkedRows += static_cast<int>(J.rows());
+    const std::string& label = res->kernel().label();
+    for (const char* kind : {"anchor", "still", "at rest", "impact"})
+      if (label.find(kind) != std::string::npos) contactKinds.insert(kind);
+  }
+  EXPECT_GT(checkedRows, 100);
+  EXPECT_TRUE(contactKinds.count("anchor") && (contactKinds.count("impact") || contactKinds.count("still"))) << GetParam();
+}
+
+// The lamps' two-point base (planar and 3D: rest and landing in a held stance), the biped's feet
+// kept still by their motion, the humanoid's four-point soles.
+INSTANTIATE_TEST_SUITE_P(Scenes, TermRows,
+                         ::testing::Values("luxo_jump.json", "luxo_3d.json", "biped_jump.json",
+                                           "humanoid_jump.json"));
 
 }  // namespace
 }  // namespace spacetime

@@ -20,6 +20,11 @@ struct ContactPoints {
 std::vector<Eigen::Vector3d> contactTurns(const ContactPoints& contact, bool planar);
 // The largest distance of a point from the first.
 double contactReach(const ContactPoints& contact);
+// The points whose heights decide every point's height: the first, then each point whose offset
+// from the first is independent of the offsets already taken (in the plane, of their x and y).
+// Heights are y_0 + (R d_i)_y, linear in d_i, so if these are on the ground every point is; a
+// flat sole of four points needs three (its fourth height row is redundant).
+std::vector<int> heightPoints(const ContactPoints& contact, bool planar);
 
 // The point forces given by `forces` (laid out as above), applied at the body points.
 template <class T>

@@ -162,25 +162,48 @@ class PinKernel : public Kernel {
   std::vector<int> axes_;
 };
 
-// Contact points stay at their ground anchors. z = [q, anchors (x, z per point)]; three rows per
-// point: p - (a_x, ground, a_z).
+// Contact points stay at their ground anchors. z = [q, anchors (x, z per point)]; rows: each
+// point's x and z at its anchor, then the heights of the points that decide every point's height
+// (heightPoints) at the ground: a flat sole of four points has three such rows, not four.
 class ContactAnchorKernel : public Kernel {
  public:
   ContactAnchorKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
-                      double groundHeight, std::string label);
+                      int forceDims, double groundHeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
   int nonlinearInputs() const override { return model_->dofCount(); }  // q, not anchors
 
  private:
   std::shared_ptr<const Model<double>> model_;
   ContactPoints contact_;
+  std::vector<int> heightPoints_;
   double ground_;
+};
+
+// The rows that keep a contact's points still - at rest (order 1) or without acceleration
+// (order 2): the first point's world velocity or acceleration (forceDims rows), then the contact's
+// reach (contactReach) times the body's angular velocity or acceleration along each of its turns
+// (contactTurns, body frame), in the same units. They vanish exactly when every point is still,
+// with one row per independent motion: the points' own rows would be redundant (a four-point sole:
+// 12 rows of rank 6, which stalled the 3D humanoid; two points in the plane: 4 of rank 3).
+class ContactStillRows {
+ public:
+  ContactStillRows(ContactPoints contact, int forceDims);
+  int count() const { return forceDims_ + static_cast<int>(turns_.size()); }
+  // Writes count() rows from kinematics already run to `order`; returns the next row.
+  template <class T>
+  T* write(const Data<T>& data, int order, T* rows) const;
+
+ private:
+  ContactPoints contact_;
+  int forceDims_;
+  double reach_ = 0;
+  std::vector<Eigen::Vector3d> turns_;
 };
 
 // Contact points are at rest (order 1: their world velocity is zero) or do not accelerate
 // (order 2: their world acceleration is zero, RBDA eq. 2.42 via pointAcceleration). z = [q, qd]
-// or [q, qd, qdd]; as many rows as the points' rigid motion has rank. Keeps the points of a contact
-// that does not hold the root still between its anchor and its lift-off (SpacetimeProblem).
+// or [q, qd, qdd]; ContactStillRows. Keeps the points of a contact that does not hold the root
+// still between its anchor and its lift-off (SpacetimeProblem).
 class ContactPointMotionKernel : public Kernel {
  public:
   ContactPointMotionKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
@@ -191,11 +214,8 @@ class ContactPointMotionKernel : public Kernel {
 
  private:
   std::shared_ptr<const Model<double>> model_;
-  ContactPoints contact_;
-  int forceDims_;
+  ContactStillRows still_;
   int order_;
-  double reach_ = 0;                    // largest distance of a point from the first
-  std::vector<Eigen::Vector3d> turns_;  // body-frame rotation axes that move some point
 };
 
 // The contact forces of one sample lie in the friction cone (the ground only pushes). Forces
@@ -223,11 +243,13 @@ class FrictionConeKernel : public Kernel {
 // teleport); the unactuated rows of M (qd+ - qd-) - J^T L times impulseScale (equalities: the
 // impulse alone stops the root); the actuated rows - the impulsive joint torques that keep the
 // joints' velocities continuous (the joints' splines are C2) - times sqrt(torqueWeight)
-// (objective); the contact points' velocities after the jump (equalities, forceDims per point).
+// (objective); each contact's points at rest after the jump (equalities, ContactStillRows),
+// except those of a contact that holds the root still (`held`: a held stance starts at rest).
 class ImpactKernel : public Kernel {
  public:
   ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,
-               int forceDims, double impulseScale, double torqueWeight, std::string label);
+               const std::vector<char>& held, int forceDims, double impulseScale, double torqueWeight,
+               std::string label);
   SPACETIME_KERNEL_EVALUATORS
   // q- and q+: the velocities enter linearly (M(q-) (qd+ - qd-), J(q+) qd+), so do impulses.
   int nonlinearInputs() const override { return 2 * model_->dofCount(); }
@@ -239,6 +261,7 @@ class ImpactKernel : public Kernel {
  private:
   std::shared_ptr<const Model<double>> model_;
   std::vector<ContactPoints> contacts_;
+  std::vector<ContactStillRows> still_;
   int forceDims_;
   double impulseScale_, sqrtTorqueWeight_;
   std::vector<int> unactuated_, actuated_;

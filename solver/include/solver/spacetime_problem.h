@@ -351,6 +351,10 @@ class SpacetimeProblem {
   void layoutHeldStances();
   // Whether contact points on this character fix its floating root (held_stances.cpp).
   bool fixesRoot(int character, const ContactPoints& points) const;
+  // Whether a held stance keeps the character's root still at t (from its touch-down's after
+  // side to its lift-off): rows saying the root is at rest there hold by construction, with a
+  // zero Jacobian, and are left out (a KKT system cannot have them).
+  bool rootHeldAt(int character, double t) const;
   // Moves held breakpoints' data to their stance's pose (velocities and bubbles zero), so the
   // variables read the same through any path.
   void settleHeldStances();
