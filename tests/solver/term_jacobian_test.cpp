@@ -2,7 +2,8 @@
 // augmented-Lagrangian transform) against central finite differences, at a perturbed point
 // of each shipped scene with non-zero multipliers, so every kernel kind is exercised (and of the
 // Luxo jump landing on two contact terms at once, for the shared impact; of the biped with leg
-// bubbles). And every term's equality rows independent of each other, so the constraint Jacobian
+// bubbles; of the humanoid on four-point soles, whose anchors and still rows keep a subset of the
+// points' rows). And every term's equality rows independent of each other, so the constraint Jacobian
 // has no redundant rows by construction (what a KKT system needs).
 #include <gtest/gtest.h>
 
@@ -101,7 +102,7 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
 INSTANTIATE_TEST_SUITE_P(Scenes, TermJacobians,
                          ::testing::Values("luxo_jump.json", "luxo_3d.json", "particle_gravity.json",
                                            "luxo_jump.json:split", "luxo_jump.json:free",
-                                           "luxo_3d.json:free", "biped_jump.json:legs"));
+                                           "luxo_3d.json:free", "biped_jump.json:legs", "humanoid_jump.json"));
 
 // Within each term the equality rows' Jacobian (with respect to the variables it touches, at a
 // perturbed default guess) has full row rank. A contact's points move rigidly, so rows per point
