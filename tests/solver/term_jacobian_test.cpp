@@ -20,6 +20,30 @@
 namespace spacetime {
 namespace {
 
+// One term's rows and Jacobian at the variables' current values: one row-major block per
+// parameter block.
+struct TermJacobian {
+  bool evaluated = false;
+  std::vector<double> rows;
+  std::vector<std::vector<double>> blocks;
+};
+
+TermJacobian termJacobian(const TermResidual& res) {
+  const int m = res.num_residuals();
+  const auto& sizes = res.parameter_block_sizes();
+  std::vector<const double*> params(res.blocks().begin(), res.blocks().end());
+  TermJacobian t;
+  t.rows.resize(m);
+  t.blocks.resize(sizes.size());
+  std::vector<double*> pointers;
+  for (size_t b = 0; b < sizes.size(); ++b) {
+    t.blocks[b].resize(m * sizes[b]);
+    pointers.push_back(t.blocks[b].data());
+  }
+  t.evaluated = res.Evaluate(params.data(), t.rows.data(), pointers.data());
+  return t;
+}
+
 class TermJacobians : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(TermJacobians, MatchFiniteDifferences) {
@@ -56,14 +80,10 @@ TEST_P(TermJacobians, MatchFiniteDifferences) {
     const int m = res->num_residuals();
     const auto& sizes = res->parameter_block_sizes();
     std::vector<const double*> params(res->blocks().begin(), res->blocks().end());
-    std::vector<std::vector<double>> jac(sizes.size());
-    std::vector<double*> jacPtr;
-    for (size_t b = 0; b < sizes.size(); ++b) {
-      jac[b].resize(m * sizes[b]);
-      jacPtr.push_back(jac[b].data());
-    }
-    std::vector<double> r0(m), rp(m), rm(m);
-    ASSERT_TRUE(res->Evaluate(params.data(), r0.data(), jacPtr.data()));
+    const TermJacobian at = termJacobian(*res);
+    ASSERT_TRUE(at.evaluated);
+    const std::vector<std::vector<double>>& jac = at.blocks;
+    std::vector<double> rp(m), rm(m);
     // Skip rows at an inequality's kink, where the derivative is one-sided.
     std::vector<bool> smooth(m, true);
     for (size_t b = 0; b < sizes.size(); ++b) {
@@ -129,19 +149,12 @@ TEST_P(TermRows, EqualityRowsOfEachTermAreIndependent) {
     // Two feet landing together can repeat each other: the humanoid's legs turn only about z, so
     // both say the pelvis does not roll or yaw. That dependence is the character's, not a term's.
     if (equalities.empty() || res->kernel().label().find("' and '") != std::string::npos) continue;
-    const int m = res->num_residuals();
     const auto& sizes = res->parameter_block_sizes();
-    std::vector<const double*> params(res->blocks().begin(), res->blocks().end());
-    std::vector<std::vector<double>> jac(sizes.size());
-    std::vector<double*> jacPtr;
+    const TermJacobian at = termJacobian(*res);
+    ASSERT_TRUE(at.evaluated);
+    const std::vector<std::vector<double>>& jac = at.blocks;
     int columns = 0;
-    for (size_t b = 0; b < sizes.size(); ++b) {
-      jac[b].resize(m * sizes[b]);
-      jacPtr.push_back(jac[b].data());
-      columns += sizes[b];
-    }
-    std::vector<double> rows(m);
-    ASSERT_TRUE(res->Evaluate(params.data(), rows.data(), jacPtr.data()));
+    for (int size : sizes) columns += size;
     Eigen::MatrixXd J(equalities.size(), columns);
     for (size_t i = 0; i < equalities.size(); ++i)
       for (size_t b = 0, c = 0; b < sizes.size(); c += sizes[b], ++b)
