@@ -51,6 +51,11 @@ bool pointsFixRoot(const Model<double>& model, const DofGroup& root, const Conta
   return sv.size() == n && sv[n - 1] > 1e-6 * std::max(1.0, sv[0]);
 }
 
+// Whether a contact that holds the root holds it at t: from its start to its end, both included.
+bool holdsRootAt(const ContactVariables& ct, double t) {
+  return ct.holdsRoot && t >= ct.start - kTimeTolerance && t <= ct.end + kTimeTolerance;
+}
+
 }  // namespace
 
 bool SpacetimeProblem::fixesRoot(int character, const ContactPoints& points) const {
@@ -83,8 +88,7 @@ bool SpacetimeProblem::physicsAt(int character, const Sample& s) const {
 
 bool SpacetimeProblem::rootHeldAt(int character, double t) const {
   return std::any_of(contacts_.begin(), contacts_.end(), [&](const ContactVariables& ct) {
-    return ct.holdsRoot && ct.character == character && t >= ct.start - kTimeTolerance &&
-           t <= ct.end + kTimeTolerance;
+    return ct.character == character && holdsRootAt(ct, t);
   });
 }
 
@@ -98,10 +102,7 @@ void SpacetimeProblem::layoutHeldStances() {
       for (const ContactVariables& ct : contacts_) {
         if (!ct.holdsRoot || ct.character != static_cast<int>(c)) continue;
         // The first of an impact's repeated breakpoints is the state before touch-down.
-        auto inside = [&](int k) {
-          return g.breaks[k] >= ct.start - kTimeTolerance && g.breaks[k] <= ct.end + kTimeTolerance &&
-                 !g.beforeImpact(k);
-        };
+        auto inside = [&](int k) { return holdsRootAt(ct, g.breaks[k]) && !g.beforeImpact(k); };
         for (int k = 0; k < breaks; ++k) held[k] |= inside(k);
         for (int k = 0; k + 1 < breaks; ++k)
           if (inside(k) && inside(k + 1) && g.breaks[k + 1] - g.breaks[k] > kTimeTolerance) g.heldInterval[k] = 1;
