@@ -170,6 +170,7 @@ void BM_EventLoopGapDuringLuxoSolve(benchmark::State& state, WindowMode mode) {
   }
   state.counters["gap_ms"] = static_cast<double>(gap.worstMs);
   state.counters["iterates"] = gap.iterates;
+  state.counters["worst_at_ms"] = static_cast<double>(gap.worstEndedAtMs);
 }
 
 }  // namespace

@@ -236,6 +236,15 @@ GraphPanel::GraphPanel(Document* doc, QWidget* parent) : QWidget(parent), doc_(d
   chart->setMargins(QMargins(4, 4, 4, 4));
   view_ = new GraphView(chart);
   view_->setRenderHint(QPainter::Antialiasing, false);  // software-rendered: keep repaints cheap
+  // The chart repaints with the rest of the window, never on its own. By default a scene whose
+  // items changed sends the window's pending UpdateRequest at once (QGraphicsScene
+  // _q_processDirtyItems -> dispatchPendingUpdateRequests), so one replot painted and flushed the
+  // whole window two or three times in a row - with the OpenGL viewport in the window each flush
+  // is a full composition, 15-25 ms under Xvfb, and the event loop waited 50-90 ms per solver
+  // iterate. With NoViewportUpdate the scene leaves the viewport alone, and the scene's changed()
+  // (emitted from the event loop) asks for an ordinary, coalesced update.
+  view_->setViewportUpdateMode(QGraphicsView::NoViewportUpdate);
+  connect(chart->scene(), &QGraphicsScene::changed, view_->viewport(), qOverload<>(&QWidget::update));
   view_->setMouseTracking(true);
   view_->series = &plotted_;
   view_->timeClicked = [this](double t) { doc_->setCurrentTime(t); };  // clamped to the clip
