@@ -46,6 +46,7 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["iterations"] = s.iterations;
   j["outer_iterations"] = s.outerIterations;
   j["newton_steps"] = s.newtonSteps;
+  j["newton_solves"] = s.newtonSolves;  // KKT systems solved; newton_steps counts active-set changes too
   j["restoration_steps"] = s.restorationSteps;
   j["restoration_seconds"] = s.restorationSeconds;
   j["polished"] = s.polished;

@@ -348,6 +348,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     po.deadline = deadline;
     const PolishResult result = polishNewton(problem, po, cancel);
     summary.newtonSteps += result.iterations;
+    summary.newtonSolves += result.solves;
     summary.jacobianSeconds += result.jacobianSeconds;
     summary.polishSeconds += result.seconds;
     summary.polishEvaluationSeconds += result.jacobianSeconds;

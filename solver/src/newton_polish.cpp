@@ -123,6 +123,15 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
         activeSetChanged = true;
       }
     }
+    // The steps need the Jacobians of the objective rows, the equalities and the held rows, and
+    // of any inequality a trial point violates (it is held next): the other inequalities' blocks,
+    // most of the problem's, are evaluated without their Jets in the line search.
+    {
+      std::vector<char> needed(rowCount, 1);
+      for (int row = 0; row < rowCount; ++row)
+        needed[row] = evaluator.kind(row) != RowKind::Inequality || held[row];
+      evaluator.limitJacobians(needed, options.tolerance);
+    }
     if (activeSetChanged) {
       analysed = false;
       if (it >= options.maxIterations) return giveUp(outOfSteps);
@@ -209,6 +218,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     }
     result.factorisationSeconds += secondsSince(phase);
     if (!d.allFinite()) return giveUp("the Newton step is not finite");
+    ++result.solves;
     phase = Clock::now();
 
     // Full Newton steps near a KKT point; halve while the step makes the violation or the KKT

@@ -154,14 +154,26 @@ class RawEvaluator {
     return std::any_of(terms_.begin(), terms_.end(), [](const TermResidual* t) { return !t || t->moving(); });
   }
 
+  // From now on, the Jacobian rows evaluate() must compute: those `needed` (one per row) and any
+  // row above `below`; blocks of inequalities with neither get zero rows, without their Jets
+  // (TermResidual::jacobianUnneeded). Until called, every row's.
+  void limitJacobians(const std::vector<char>& needed, double below) {
+    needed_.assign(problem_.augmentedLagrangian().lambda.size(), 1);
+    for (int r = 0; r < rows(); ++r) needed_[multiplier_[r]] = needed[r];
+    neededBelow_ = below;
+  }
+
   // Rows (and their Jacobian if asked) at the blocks' current values; false if not finite.
   bool evaluate(RawRows* out, bool jacobian) {
     AugmentedLagrangianState& al = problem_.augmentedLagrangian();
     al.raw = true;
+    al.rawNeeded.swap(needed_);
+    al.rawUnneededBelow = neededBelow_;
     std::vector<double> values;
     double cost = 0;
     ceres::CRSMatrix J;
     const bool ok = problem_.ceresProblem().Evaluate(options_, &cost, &values, nullptr, jacobian ? &J : nullptr);
+    al.rawNeeded.swap(needed_);
     al.raw = false;
     if (!ok) return false;
     out->values = Eigen::Map<const Vec>(values.data(), static_cast<Eigen::Index>(values.size()));
@@ -187,7 +199,11 @@ class RawEvaluator {
       for (size_t k = part; k < terms_.size(); k += threads) {
         const TermResidual* term = terms_[k];
         if (term->kernel().nonlinearInputs() == 0) continue;
-        const Eigen::MatrixXd H = term->weightedHessianNow(w.data() + firstRow_[k]);
+        // Rows of weight zero (the polish's inequalities outside its active set: most of them)
+        // add no curvature; their finite differences of Jacobians were most of its Hessian.
+        const double* weights = w.data() + firstRow_[k];
+        if (std::all_of(weights, weights + term->num_residuals(), [](double x) { return x == 0; })) continue;
+        const Eigen::MatrixXd H = term->weightedHessianNow(weights);
         const std::vector<int>& col = columns_[k];
         for (int i = 0; i < H.rows(); ++i)
           for (int j = 0; j < H.cols(); ++j)
@@ -207,6 +223,8 @@ class RawEvaluator {
  private:
   SpacetimeProblem& problem_;
   ceres::Problem::EvaluateOptions options_;
+  std::vector<char> needed_;  // per multiplier row (limitJacobians); empty: every row
+  double neededBelow_ = 0;
   std::vector<const TermResidual*> terms_;
   std::vector<int> firstRow_;
   std::vector<std::vector<int>> columns_;  // each term's tangent column per stacked input (-1: constant)

@@ -110,6 +110,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.iterations += summary.iterations;
     total.outerIterations += summary.outerIterations;
     total.newtonSteps += summary.newtonSteps;
+    total.newtonSolves += summary.newtonSolves;
     total.restorationSteps += summary.restorationSteps;
     total.restorationSeconds += summary.restorationSeconds;
     total.interiorPointIterations += summary.interiorPointIterations;
@@ -177,6 +178,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.iterations = total.iterations;
   best.summary.outerIterations = total.outerIterations;
   best.summary.newtonSteps = total.newtonSteps;
+  best.summary.newtonSolves = total.newtonSolves;
   best.summary.restorationSteps = total.restorationSteps;
   best.summary.restorationSeconds = total.restorationSeconds;
   best.summary.interiorPointIterations = total.interiorPointIterations;

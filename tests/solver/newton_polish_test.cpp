@@ -111,6 +111,7 @@ TEST(NewtonPolish, ParticleLandsOnTheAnalyticMinimumInOneStep) {
     ASSERT_TRUE(s.converged) << name << ": " << s.reason;
     EXPECT_TRUE(s.polished) << s.reason;
     EXPECT_EQ(s.newtonSteps, 1) << name;
+    EXPECT_EQ(s.newtonSolves, 1) << name;
     EXPECT_EQ(s.iterations, 0) << name;
     // Seed Figure 7 (particle_optimum.h): 432 + 0 + 12 without gravity.
     const double expected = testing::analyticParticleMinimum(scene);
@@ -212,6 +213,10 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheColdOptimum) {
     EXPECT_TRUE(w.polished);
     if (move < 0.05) {
       EXPECT_EQ(w.iterations, 0);
+      // The polish's passes are KKT solves and changes of its active set; the small edit needs
+      // both (every step is a solve, and the active set moves with the landing).
+      EXPECT_GT(w.newtonSolves, 0);
+      EXPECT_LT(w.newtonSolves, w.newtonSteps);
       EXPECT_NEAR(w.objective / c.objective, 1.0, 1e-6) << w.objective << " vs " << c.objective;
     } else {
       EXPECT_LT(w.iterations, 600);

@@ -9,6 +9,7 @@
 
 #include <Eigen/QR>
 
+#include <algorithm>
 #include <random>
 #include <set>
 
@@ -176,6 +177,43 @@ TEST_P(TermRows, EqualityRowsOfEachTermAreIndependent) {
 INSTANTIATE_TEST_SUITE_P(Scenes, TermRows,
                          ::testing::Values("luxo_jump.json", "luxo_3d.json", "biped_jump.json",
                                            "humanoid_jump.json"));
+
+// The Newton polish asks for the Jacobians it needs (AugmentedLagrangianState::rawNeeded): a
+// block of inequalities none of which is needed and none above the threshold keeps its raw rows
+// and gets a zero Jacobian; every other block is evaluated in full, as if nothing were marked.
+// At the perturbed default guess of the jump some clearance rows lie above the threshold and
+// some below, so both cases are met.
+TEST(TermJacobianLimits, OnlyUnneededInequalityBlocksBelowTheThresholdAreSkipped) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (double& x : problem->variables()) x += noise(rng);
+  AugmentedLagrangianState& al = problem->augmentedLagrangian();
+  al.raw = true;
+  const double below = 1e-3;
+  int skipped = 0, kept = 0;
+  for (const TermResidual* res : problem->residuals()) {
+    al.rawNeeded.clear();
+    const TermJacobian full = termJacobian(*res);
+    al.rawNeeded.assign(al.lambda.size(), 1);
+    for (int r = 0; r < res->num_residuals(); ++r) al.rawNeeded[res->firstMultiplier() + r] = 0;
+    al.rawUnneededBelow = below;
+    const TermJacobian limited = termJacobian(*res);
+    ASSERT_TRUE(full.evaluated && limited.evaluated);
+    EXPECT_EQ(limited.rows, full.rows) << res->kernel().label();
+    const bool skippable = res->kernel().allInequalities() && !res->moving() &&
+                           std::all_of(full.rows.begin(), full.rows.end(), [&](double v) { return v <= below; });
+    for (size_t b = 0; b < full.blocks.size(); ++b)
+      for (size_t k = 0; k < full.blocks[b].size(); ++k)
+        EXPECT_EQ(limited.blocks[b][k], skippable ? 0.0 : full.blocks[b][k]) << res->kernel().label();
+    (skippable ? skipped : kept) += res->kernel().allInequalities() ? 1 : 0;
+  }
+  al.rawNeeded.clear();
+  EXPECT_GT(skipped, 100);
+  EXPECT_GT(kept, 0);  // inequality blocks above the threshold: evaluated in full
+}
 
 }  // namespace
 }  // namespace spacetime

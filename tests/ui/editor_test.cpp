@@ -1130,7 +1130,7 @@ class EditorTest : public QObject {
     QCOMPARE(scene.characters[0].bodies.size(), bodies);
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(scaled(240000)));
-    QTRY_VERIFY(w.document()->motion() && w.document()->motion()->validity);
+    QTRY_VERIFY_WITH_TIMEOUT(w.document()->motion() && w.document()->motion()->validity, scaled(5000));
     QVERIFY2(w.document()->motion()->converged, qPrintable(w.statusText()));
     QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
   }

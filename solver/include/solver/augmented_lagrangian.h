@@ -148,7 +148,10 @@ struct SolverSummary {
   std::vector<ViolatedConstraint> violated;
   int outerIterations = 0;
   int iterations = 0;           // total Levenberg-Marquardt (interior point: IPOPT) iterations
-  int newtonSteps = 0;          // of the Newton polish, whether it succeeded or not
+  // The Newton polish, whether it succeeded or not: its passes (PolishResult::iterations:
+  // steps and active-set changes) and the KKT systems it solved (the steps' cost).
+  int newtonSteps = 0;
+  int newtonSolves = 0;
   int restorationSteps = 0;     // of the restoration phase after a stall (solver/restoration.h)
   double restorationSeconds = 0;
   bool polished = false;        // the result is the Newton polish's KKT point

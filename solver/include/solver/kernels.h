@@ -10,6 +10,7 @@
 
 #include <ceres/jet.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,6 +44,9 @@ class Kernel {
   int inputSize() const { return inputs_; }
   int rowCount() const { return static_cast<int>(kinds_.size()); }
   const std::vector<RowKind>& rowKinds() const { return kinds_; }
+  bool allInequalities() const {
+    return !kinds_.empty() && std::all_of(kinds_.begin(), kinds_.end(), [](RowKind k) { return k == RowKind::Inequality; });
+  }
   const std::string& label() const { return label_; }
 
   virtual void evaluate(const double* z, double* rows) const = 0;

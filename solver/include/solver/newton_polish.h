@@ -39,7 +39,7 @@
 namespace spacetime {
 
 struct PolishOptions {
-  int maxIterations = 15;
+  int maxIterations = 15;      // Newton steps and active-set changes together
   double tolerance = 1e-7;     // largest constraint row at the end (as SolverOptions::tolerance)
   double kktTolerance = 1e-8;  // |J_r^T r + A^T y|_inf relative to max(1, |J_r^T r|_inf)
   int threads = 1;
@@ -50,7 +50,10 @@ struct PolishOptions {
 
 struct PolishResult {
   bool converged = false;  // the variables moved to a KKT point; otherwise they are unchanged
+  // Passes of the polish before the last: Newton steps and passes that only changed the active
+  // set. `solves` counts the KKT systems factorised and solved (every step, accepted or not).
   int iterations = 0;
+  int solves = 0;
   double kktResidual = 0;  // relative, at the last point reached
   double maxViolation = 0;
   std::string reason;      // why it stopped

@@ -36,6 +36,11 @@ struct AugmentedLagrangianState {
   // Raw mode (the Newton polish, newton_polish.h): every row passes through untouched, so the Jacobian
   // Ceres evaluates is that of the objective, equality and inequality rows themselves.
   bool raw = false;
+  // Raw mode, when not empty: the rows whose Jacobian the caller needs (one per multiplier; the
+  // Newton polish's objective rows, equalities and held inequalities). A block of inequalities
+  // none of which is needed nor above rawUnneededBelow gets its rows and a zero Jacobian.
+  std::vector<char> rawNeeded;
+  double rawUnneededBelow = 0;
   std::vector<double> lambda;  // one per row of every residual (objective rows unused)
 };
 
@@ -133,6 +138,8 @@ class TermResidual : public ceres::CostFunction {
   Eigen::VectorXd inputs(const Map& m, double const* const* parameters) const;  // z = B p
   Eigen::VectorXd stacked(double const* const* parameters) const;  // p: the blocks but T
   void stackInto(double const* const* parameters, double* p) const;  // the same into p
+  // The block's Jacobian is zero or not needed at z (its final rows written to rows).
+  bool jacobianUnneeded(const double* z, double* rows) const;
   void indexColumns(const std::vector<int>& sizes);  // fills colBlock_, colIndex_
   // Scales the objective rows of raw kernel rows.
   void scaleObjective(double scale, double* rows) const;
