@@ -163,6 +163,13 @@ std::vector<int> TermResidual::nonlinearColumns() const {
 // blocks are inactive at any iterate (the jump: 22 of 4332 rows active at the optimum), and the
 // Jets of their kinematic kernels (every body's ground clearance at every sample and halfway)
 // were the largest share of a Jacobian evaluation. The values cost a double evaluation.
+// The augmented-Lagrangian transform's rule for inequality row r of value g: it is dropped (row
+// and Jacobian zero) where g <= 0 when projecting onto the constraints, else where the shifted
+// g + lambda/rho <= 0 (N&W eq. 17.65).
+bool TermResidual::inequalityDropped(int r, double value) const {
+  return (al_->projectOnly ? value : value + al_->lambda[firstMultiplier_ + r] / al_->rho) <= 0;
+}
+
 bool TermResidual::jacobianUnneeded(const double* z, double* rows) const {
   if (!kernel_->allInequalities()) return false;
   const int m = kernel_->rowCount();
@@ -174,10 +181,7 @@ bool TermResidual::jacobianUnneeded(const double* z, double* rows) const {
   kernel_->evaluate(z, rows);
   for (int r = 0; r < m; ++r) {
     if (!std::isfinite(rows[r])) return false;
-    const double shifted = al_->raw ? rows[r] - al_->rawUnneededBelow
-                           : al_->projectOnly ? rows[r]
-                                              : rows[r] + al_->lambda[firstMultiplier_ + r] / al_->rho;
-    if (shifted > 0) return false;
+    if (al_->raw ? rows[r] > al_->rawUnneededBelow : !inequalityDropped(r, rows[r])) return false;
   }
   if (!al_->raw) std::fill(rows, rows + m, 0.0);
   return true;
@@ -228,7 +232,7 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
     if (al_->raw) continue;
     if (al_->projectOnly) {
       const bool zero = kinds[r] == RowKind::Objective ||
-                        (kinds[r] == RowKind::Inequality && residuals[r] <= 0);
+                        (kinds[r] == RowKind::Inequality && inequalityDropped(r, residuals[r]));
       if (zero) residuals[r] = 0;
       rowScale[r] = zero ? 0 : 1;
       continue;
@@ -236,7 +240,7 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
     if (kinds[r] == RowKind::Objective) continue;
     const double shift = al_->lambda[firstMultiplier_ + r] / al_->rho;
     const double s = residuals[r] + shift;
-    if (kinds[r] == RowKind::Inequality && s <= 0) {
+    if (kinds[r] == RowKind::Inequality && inequalityDropped(r, residuals[r])) {
       residuals[r] = 0;
       rowScale[r] = 0;
     } else {

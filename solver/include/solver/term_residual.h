@@ -140,6 +140,7 @@ class TermResidual : public ceres::CostFunction {
   void stackInto(double const* const* parameters, double* p) const;  // the same into p
   // The block's Jacobian is zero or not needed at z (its final rows written to rows).
   bool jacobianUnneeded(const double* z, double* rows) const;
+  bool inequalityDropped(int r, double value) const;  // the transform zeroes inequality row r
   void indexColumns(const std::vector<int>& sizes);  // fills colBlock_, colIndex_
   // Scales the objective rows of raw kernel rows.
   void scaleObjective(double scale, double* rows) const;
