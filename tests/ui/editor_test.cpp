@@ -1335,7 +1335,19 @@ class EditorTest : public QObject {
     doc.selectBody(0, "head");  // its joint j3 has limits: their row
     QVERIFY(list->currentItem());
     QCOMPARE(list->currentItem()->text(0), QString("j3"));
+    // Its form says where the limits are edited, and brings the builder forward.
+    auto* hint = w.constraints()->form()->findChild<QLabel*>("limitHint");
+    QVERIFY(hint);
+    QVERIFY(hint->text().contains("j3") && hint->text().contains("head"));
+    auto* builderDock = w.findChild<QDockWidget*>("builderDock");
+    auto* sceneDock = w.findChild<QDockWidget*>("sceneDock");
+    sceneDock->raise();
+    QTRY_VERIFY(builderDock->visibleRegion().isEmpty());
+    QTest::mouseClick(w.constraints()->form()->findChild<QPushButton*>("editLimitInBuilder"), Qt::LeftButton);
+    QTRY_VERIFY(!builderDock->visibleRegion().isEmpty());
+    QCOMPARE(doc.selectedBody(), std::string("head"));
     doc.selectBody(0, "base");  // the root: no limit row
+    QVERIFY(!w.constraints()->form()->findChild<QLabel*>("limitHint"));
     QVERIFY(!list->currentItem());
     QVERIFY(list->selectedItems().isEmpty());
     const size_t terms = doc.scene().terms.size();

@@ -5,6 +5,7 @@
 #include <QHBoxLayout>
 
 #include <QHeaderView>
+#include <QLabel>
 #include <QMenu>
 #include <QScrollArea>
 #include <QSplitter>
@@ -148,7 +149,23 @@ void ConstraintsPanel::rebuildForm() {
   form_->clear();
   formTerm_ = exists ? id : std::string();
   formRows_ = rows;
-  if (!exists) return;
+  if (!exists) {
+    // A joint's limits are the joint's properties, edited with the rest of its body in the
+    // builder: say so rather than show an empty form (seen: a highlighted limit row, no form).
+    const QTreeWidgetItem* row = list_->currentItem();
+    if (row && row->data(0, Qt::UserRole + 1).toString() == "limit") {
+      auto* hint = new QLabel(tr("Joint %1's limits belong to body %2: edit them in the Builder.")
+                                  .arg(row->text(0), row->data(0, Qt::UserRole).toString()));
+      hint->setObjectName("limitHint");
+      hint->setWordWrap(true);
+      form_->addWidget({}, hint);
+      auto* open = new QPushButton(tr("Edit in Builder"));
+      open->setObjectName("editLimitInBuilder");
+      connect(open, &QPushButton::clicked, this, &ConstraintsPanel::showBuilder);
+      form_->addWidget({}, open);
+    }
+    return;
+  }
   termForm(id);
   form_->refresh();
 }

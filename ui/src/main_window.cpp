@@ -77,6 +77,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   QDockWidget* sceneDock = dock(tr("Scene"), "sceneDock", sceneSettings_, Qt::LeftDockWidgetArea);
   tabifyDockWidget(builderDock, sceneDock);
   builderDock->raise();
+  connect(constraints_, &ConstraintsPanel::showBuilder, builderDock, [builderDock] {
+    builderDock->show();
+    builderDock->raise();
+  });
   QDockWidget* constraintsDock = dock(tr("Constraints"), "constraintsDock", constraints_, Qt::RightDockWidgetArea);
   QDockWidget* timelineDock = dock(tr("Timeline"), "timelineDock", timeline_, Qt::BottomDockWidgetArea);
   QDockWidget* graphDock = dock(tr("Graphs"), "graphDock", graphs_, Qt::BottomDockWidgetArea);

@@ -38,6 +38,8 @@ class ConstraintsPanel : public QWidget {
   void said(const QString& message);
   // The contact's "Add by clicking the body": the viewport's next click on it adds the point.
   void pickContactPoint(const std::string& term);
+  // A joint limit row's "Edit in Builder": its body is selected; the builder should come forward.
+  void showBuilder();
 
  private:
   void rebuildList();
