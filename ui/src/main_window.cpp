@@ -113,13 +113,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     progress_->setText(tr("Solving… iteration %1 · objective %2 · violation %3")
                            .arg(m->iterations).arg(m->objective, 0, 'g', 6).arg(m->maxViolation, 0, 'g', 3));
     const double done = progressEstimate_.update(m->maxViolation);
-    // QProgressBar::setValue repaints at once (a synchronous paint and flush of the whole
-    // window, ~20 ms under Xvfb with the OpenGL viewport in it); with updates off it only marks
-    // itself dirty, and it is drawn with the iterate's other changes.
-    solveProgress_->setUpdatesEnabled(false);
-    solveProgress_->setValue(static_cast<int>(std::lround(1000 * done)));
-    solveProgress_->setFormat(tr("%1 % of the way to the tolerance").arg(std::lround(100 * done)));
-    solveProgress_->setUpdatesEnabled(true);
+    showSolveProgress(static_cast<int>(std::lround(1000 * done)),
+                      tr("%1 % of the way to the tolerance").arg(std::lround(100 * done)));
   });
   connect(&job_, &SolverJob::finished, this, [this](std::shared_ptr<const SolvedMotion> m, const SolverSummary& s) {
     const bool shown = doc_.acceptResult(m);
@@ -454,9 +449,19 @@ void MainWindow::solve() {
   stopAction_->setEnabled(true);
   progress_->setText(tr("Solving…"));
   progressEstimate_ = SolveProgress(doc_.scene().solver.tolerance);
-  solveProgress_->setValue(0);
-  solveProgress_->setFormat(tr("starting"));
+  showSolveProgress(0, tr("starting"));
   solveProgress_->show();
+}
+
+void MainWindow::showSolveProgress(int permille, const QString& format) {
+  // QProgressBar::setValue repaints at once (a synchronous paint and flush of the whole window,
+  // ~20 ms under Xvfb with the OpenGL viewport in it): at every iterate, and at every edit that
+  // starts a solve while a pin is dragged. With updates off it only marks itself dirty and is
+  // drawn with the window's other changes.
+  solveProgress_->setUpdatesEnabled(false);
+  solveProgress_->setValue(permille);
+  solveProgress_->setFormat(format);
+  solveProgress_->setUpdatesEnabled(true);
 }
 
 void MainWindow::stopSolve() { job_.cancel(); }

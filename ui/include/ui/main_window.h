@@ -87,6 +87,8 @@ class MainWindow : public QMainWindow {
       const std::function<std::string(size_t, const CharacterSpec&, const Model<double>&)>& text);
   void createActions();
   void updateTitle();
+  // The solve's progress bar: its value (per mille) and text, drawn with the next paint.
+  void showSolveProgress(int permille, const QString& format);
   bool maybeSave();
   void addRecent(const QString& path);
   void rebuildRecentMenu();
