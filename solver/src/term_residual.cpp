@@ -154,15 +154,6 @@ std::vector<int> TermResidual::nonlinearColumns() const {
   return cols;
 }
 
-// True if the block's Jacobian is not needed at z, with its rows' final values written to
-// `rows`: every row is an inequality, and either the augmented-Lagrangian transform below
-// zeroes each (its shifted value g + lambda/rho <= 0, or g <= 0 when projecting onto the
-// constraints) or, in raw mode, the caller marked none of them as needed (AugmentedLagrangianState::
-// rawNeeded: the Newton polish's inequalities outside its active set) and none exceeds
-// rawUnneededBelow (so none joins the active set at this point). Most of a problem's inequality
-// blocks are inactive at any iterate (the jump: 22 of 4332 rows active at the optimum), and the
-// Jets of their kinematic kernels (every body's ground clearance at every sample and halfway)
-// were the largest share of a Jacobian evaluation. The values cost a double evaluation.
 // The augmented-Lagrangian transform's rule for inequality row r of value g: it is dropped (row
 // and Jacobian zero) where g <= 0 when projecting onto the constraints, else where the shifted
 // g + lambda/rho <= 0 (N&W eq. 17.65).
@@ -170,6 +161,14 @@ bool TermResidual::inequalityDropped(int r, double value) const {
   return (al_->projectOnly ? value : value + al_->lambda[firstMultiplier_ + r] / al_->rho) <= 0;
 }
 
+// True if the block's Jacobian is not needed at z, with its rows' final values written to
+// `rows`: every row is an inequality, and either the augmented-Lagrangian transform drops each
+// (inequalityDropped) or, in raw mode, the caller marked none of them as needed (AugmentedLagrangianState::
+// rawNeeded: the Newton polish's inequalities outside its active set) and none exceeds
+// rawUnneededBelow (so none joins the active set at this point). Most of a problem's inequality
+// blocks are inactive at any iterate (the jump: 22 of 4332 rows active at the optimum), and the
+// Jets of their kinematic kernels (every body's ground clearance at every sample and halfway)
+// were the largest share of a Jacobian evaluation. The values cost a double evaluation.
 bool TermResidual::jacobianUnneeded(const double* z, double* rows) const {
   if (!kernel_->allInequalities()) return false;
   const int m = kernel_->rowCount();
