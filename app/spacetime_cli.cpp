@@ -2,7 +2,7 @@
 //
 //   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]
 //                       [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet] [--no-polish]
-//                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt]
+//                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt|sqp]
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
 // solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
@@ -37,7 +37,7 @@ namespace {
   "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]\n" \
   "                          [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet]\n" \
   "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n" \
-  "                          [--method al|ipopt]\n"
+  "                          [--method al|ipopt|sqp]\n"
 
 constexpr const char* kHelp =
     SPACETIME_CLI_USAGE
@@ -55,7 +55,9 @@ constexpr const char* kHelp =
     "  --quiet            no progress on stderr\n"
     "  --no-polish        the augmented Lagrangian without the Newton polish\n"
     "  --method M         al: augmented Lagrangian with Newton polish; ipopt: IPOPT's interior\n"
-    "                     point with exact Hessians (default: the scene's solver.method, else al)\n"
+    "                     point with exact Hessians; sqp: sequential quadratic programming, the\n"
+    "                     augmented Lagrangian where its steps fail (default: the scene's\n"
+    "                     solver.method, else al)\n"
     "  --max-refinements N  finer transcriptions tried when the motion fails the validity report\n"
     "                     or the solve stalls (default 3; 0: only the scene's transcription)\n"
     "  --init SOLVED.json start from the solution stored in a scene: DIR/scene.json of an earlier\n"
@@ -137,7 +139,7 @@ int run(int argc, char** argv) {
     else if (a == "--method" && i + 1 < argc) {
       method = argv[++i];
       SolverMethod m;
-      if (!parseSolverMethod(method, &m)) return usage("--method must be al or ipopt");
+      if (!parseSolverMethod(method, &m)) return usage("--method must be al, ipopt or sqp");
     }
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (scenePath.empty()) scenePath = a;

@@ -136,3 +136,24 @@ total = sum(a["seconds"] for a in s.get("refinement", [])) or s["solve_seconds"]
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6g} | {tried} | {total:.1f} |")
 PY
 done
+
+echo
+echo "## The methods on the shipped scenes (spacetime-cli solve --method M, 2 threads, single runs)"
+echo
+echo "| scene | method | exit | objective | SQP steps (s in programs) | LM iterations + Newton passes | seconds |"
+echo "|---|---|---|---|---|---|---|"
+for name in particle particle_gravity luxo_jump luxo_hurdle luxo_heavy luxo_3d luxo_power_formula; do
+  for method in al sqp; do
+    set +e
+    build/app/spacetime-cli solve "resources/scenes/$name.json" --out "$tmp/m_${name}_$method" --method "$method" \
+      --quiet --max-seconds 300 2> /dev/null
+    status=$?
+    set -e
+    python3 - "$tmp/m_${name}_$method/summary.json" "$name" "$method" "$status" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {s['objective']:.6f} | {s['sqp_steps']} ({s['qp_seconds']:.2f}) | "
+      f"{s['iterations']} + {s['newton_steps']} | {s['solve_seconds']:.2f} |")
+PY
+  done
+done

@@ -47,6 +47,9 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["outer_iterations"] = s.outerIterations;
   j["newton_steps"] = s.newtonSteps;
   j["newton_solves"] = s.newtonSolves;  // KKT systems solved; newton_steps counts active-set changes too
+  j["sqp_steps"] = s.sqpSteps;  // method sqp: its quadratic programs (0: did not run)
+  j["sqp_seconds"] = s.sqpSeconds;
+  j["qp_seconds"] = s.qpSeconds;
   j["restoration_steps"] = s.restorationSteps;
   j["restoration_seconds"] = s.restorationSeconds;
   j["polished"] = s.polished;

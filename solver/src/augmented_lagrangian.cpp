@@ -11,6 +11,7 @@
 
 #include "solver/interior_point.h"
 #include "solver/newton_polish.h"
+#include "solver/sqp.h"
 #include "solver/restoration.h"
 
 namespace spacetime {
@@ -109,6 +110,7 @@ std::string SolverOptions::validate() const {
   if (!(releaseFreeEndsAt > 0)) return "releaseFreeEndsAt must be > 0";
   if (!(polishBelow > 0)) return "polishBelow must be > 0";
   if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
+  if (sqpMaxSteps < 1) return "sqpMaxSteps must be at least 1";
   if (coldNewtonSteps < 0) return "coldNewtonSteps must not be negative";
   if (stallUpdates < 1) return "stallUpdates must be at least 1";
   if (interiorPointAfterStallIterations < 1 || interiorPointMaxIterations < 1)
@@ -145,11 +147,16 @@ std::string toString(SolveStatus s) {
 }
 
 std::string toString(SolverMethod m) {
-  return m == SolverMethod::InteriorPoint ? "ipopt" : "al";
+  switch (m) {
+    case SolverMethod::InteriorPoint: return "ipopt";
+    case SolverMethod::Sqp: return "sqp";
+    case SolverMethod::AugmentedLagrangian: break;
+  }
+  return "al";
 }
 
 bool parseSolverMethod(const std::string& name, SolverMethod* method) {
-  for (SolverMethod m : {SolverMethod::AugmentedLagrangian, SolverMethod::InteriorPoint})
+  for (SolverMethod m : {SolverMethod::AugmentedLagrangian, SolverMethod::InteriorPoint, SolverMethod::Sqp})
     if (name == toString(m)) {
       *method = m;
       return true;
@@ -290,6 +297,17 @@ void interiorPointAfterStall(SpacetimeProblem& problem, const SolverOptions& opt
 
 }  // namespace
 
+void addPolishTo(const PolishResult& result, SolverSummary* summary) {
+  summary->newtonSteps += result.iterations;
+  summary->newtonSolves += result.solves;
+  summary->jacobianSeconds += result.jacobianSeconds;
+  summary->polishSeconds += result.seconds;
+  summary->polishEvaluationSeconds += result.jacobianSeconds;
+  summary->hessianSeconds += result.hessianSeconds;
+  summary->factorisationSeconds += result.factorisationSeconds;
+  summary->lineSearchSeconds += result.lineSearchSeconds;
+}
+
 SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
                              const ProgressCallback& callback, const std::atomic<bool>* cancel) {
   const Clock::time_point start = Clock::now();
@@ -300,6 +318,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     return summary;
   }
   if (options.method == SolverMethod::InteriorPoint) return solveInteriorPoint(problem, options, callback, cancel);
+  if (options.method == SolverMethod::Sqp) return solveSqp(problem, options, callback, cancel);
   AugmentedLagrangianState& al = problem.augmentedLagrangian();
   const bool coldStart = !options.warmStart || !(al.rho > 0);
   if (coldStart) std::fill(al.lambda.begin(), al.lambda.end(), 0.0);
@@ -347,14 +366,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
     po.threads = options.threads;
     po.deadline = deadline;
     const PolishResult result = polishNewton(problem, po, cancel);
-    summary.newtonSteps += result.iterations;
-    summary.newtonSolves += result.solves;
-    summary.jacobianSeconds += result.jacobianSeconds;
-    summary.polishSeconds += result.seconds;
-    summary.polishEvaluationSeconds += result.jacobianSeconds;
-    summary.hessianSeconds += result.hessianSeconds;
-    summary.factorisationSeconds += result.factorisationSeconds;
-    summary.lineSearchSeconds += result.lineSearchSeconds;
+    addPolishTo(result, &summary);
     if (!result.converged) return false;
     m = measure(problem);
     summary.status = SolveStatus::Converged;

@@ -111,6 +111,9 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.outerIterations += summary.outerIterations;
     total.newtonSteps += summary.newtonSteps;
     total.newtonSolves += summary.newtonSolves;
+    total.sqpSteps += summary.sqpSteps;
+    total.sqpSeconds += summary.sqpSeconds;
+    total.qpSeconds += summary.qpSeconds;
     total.restorationSteps += summary.restorationSteps;
     total.restorationSeconds += summary.restorationSeconds;
     total.interiorPointIterations += summary.interiorPointIterations;
@@ -179,6 +182,9 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.outerIterations = total.outerIterations;
   best.summary.newtonSteps = total.newtonSteps;
   best.summary.newtonSolves = total.newtonSolves;
+  best.summary.sqpSteps = total.sqpSteps;
+  best.summary.sqpSeconds = total.sqpSeconds;
+  best.summary.qpSeconds = total.qpSeconds;
   best.summary.restorationSteps = total.restorationSteps;
   best.summary.restorationSeconds = total.restorationSeconds;
   best.summary.interiorPointIterations = total.interiorPointIterations;

@@ -82,7 +82,7 @@ grep -q "does not handle free contact ends" "$tmp/free_ip.err" || fail "unclear 
 [ ! -e "$tmp/free_ip" ] || fail "the refused free-end solve wrote outputs"
 "$cli" solve "$scenes/particle.json" --out "$tmp/nomethod" --method newton 2>"$tmp/nomethod.err"; status=$?
 [ "$status" -eq 2 ] || fail "--method newton exited $status, expected 2"
-grep -q -- "--method must be al or ipopt" "$tmp/nomethod.err" || fail "unclear --method error: $(cat "$tmp/nomethod.err")"
+grep -q -- "--method must be al, ipopt or sqp" "$tmp/nomethod.err" || fail "unclear --method error: $(cat "$tmp/nomethod.err")"
 
 sed 's/"mass": 1.0/"mass": -1.0/' "$scenes/particle.json" > "$tmp/bad.json"
 "$cli" solve "$tmp/bad.json" --out "$tmp/bad" --quiet 2>"$tmp/bad.err"

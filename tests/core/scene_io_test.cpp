@@ -173,7 +173,7 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
       {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
-      {minimalWith(body, "[]", R"("solver": {"method": "sqp2"},)"), "solver.method': value \"sqp2\" is not allowed; expected \"al\" or \"ipopt\""},
+      {minimalWith(body, "[]", R"("solver": {"method": "sqp2"},)"), "solver.method': value \"sqp2\" is not allowed; expected \"al\", \"ipopt\" or \"sqp\""},
       // A number beyond a double (nlohmann's out_of_range, which used to abort).
       {minimalWith(R"({"id": "base", "mass": 1e999})"), "not valid JSON"},
       // 100 000 levels of nesting (parsing and printing them overflowed the stack), and a few

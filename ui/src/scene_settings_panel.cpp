@@ -54,9 +54,12 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
   // them on by itself after a stall.
   f.addBool(tr("Leg bubbles"), [](const Scene& s) { return s.transcription.legBubbles; },
             [](Scene& s, bool v) { s.transcription.legBubbles = v; });
-  // SolverSpec::kMethods in order: "al", "ipopt".
-  f.addChoice(tr("Solver method"), {tr("augmented Lagrangian"), tr("interior point (IPOPT)")},
-              [](const Scene& s) { return s.solver.method == "ipopt" ? 1 : 0; },
+  // SolverSpec::kMethods in order: "al", "ipopt", "sqp".
+  f.addChoice(tr("Solver method"), {tr("augmented Lagrangian"), tr("interior point (IPOPT)"), tr("SQP")},
+              [](const Scene& s) {
+                const auto* m = std::find(std::begin(SolverSpec::kMethods), std::end(SolverSpec::kMethods), s.solver.method);
+                return m == std::end(SolverSpec::kMethods) ? 0 : static_cast<int>(m - std::begin(SolverSpec::kMethods));
+              },
               [](Scene& s, int v) { s.solver.method = SolverSpec::kMethods[v]; });
   f.addDouble(tr("Solver tolerance"), [](const Scene& s) { return s.solver.tolerance; },
               [](Scene& s, double v) { s.solver.tolerance = v; }, 1e-10, 1e-2, 1e-7, 10);

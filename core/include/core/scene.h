@@ -160,8 +160,8 @@ struct TranscriptionSpec {
 
 struct SolverSpec {
   // The method (solver/augmented_lagrangian.h, SolverMethod): "al", the augmented Lagrangian
-  // with Newton polish, or "ipopt", the interior point through IPOPT.
-  static constexpr const char* kMethods[] = {"al", "ipopt"};
+  // with Newton polish, "ipopt", the interior point through IPOPT, or "sqp", the SQP.
+  static constexpr const char* kMethods[] = {"al", "ipopt", "sqp"};
   std::string method = "al";
   int maxOuterIterations = 30;
   int maxInnerIterations = 60;

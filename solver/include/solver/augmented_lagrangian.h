@@ -20,8 +20,9 @@
 namespace spacetime {
 
 // The method that solves the problem: the augmented Lagrangian with Newton polish (the
-// default), or the interior-point method through IPOPT (interior_point.h) where it is built.
-enum class SolverMethod { AugmentedLagrangian, InteriorPoint };
+// default), the interior-point method through IPOPT (interior_point.h) where it is built, or
+// the SQP (sqp.h).
+enum class SolverMethod { AugmentedLagrangian, InteriorPoint, Sqp };
 
 struct SolverOptions {
   SolverMethod method = SolverMethod::AugmentedLagrangian;
@@ -100,6 +101,9 @@ struct SolverOptions {
   bool interiorPointAfterStall = true;
   int interiorPointAfterStallIterations = 200;
   int interiorPointMaxIterations = 3000;  // IPOPT's max_iter (SolverMethod::InteriorPoint)
+  // SolverMethod::Sqp: its steps before it hands over to the augmented Lagrangian (the jump
+  // converges in 15-35; a long one that needs more is not converging).
+  int sqpMaxSteps = 60;
 
   std::string validate() const;  // empty if valid, else what is wrong
   // The wall-clock instant a solve started at `start` must stop: maxSeconds less spentSeconds,
@@ -152,6 +156,9 @@ struct SolverSummary {
   // steps and active-set changes) and the KKT systems it solved (the steps' cost).
   int newtonSteps = 0;
   int newtonSolves = 0;
+  int sqpSteps = 0;             // SolverMethod::Sqp: its steps (quadratic programs)
+  double sqpSeconds = 0;        // the SQP's time, its polish included
+  double qpSeconds = 0;         // of which in the quadratic programs
   int restorationSteps = 0;     // of the restoration phase after a stall (solver/restoration.h)
   double restorationSeconds = 0;
   bool polished = false;        // the result is the Newton polish's KKT point
@@ -197,7 +204,7 @@ std::vector<ViolatedConstraint> unmetConstraints(const SpacetimeProblem& problem
 std::string describeViolated(const std::vector<ViolatedConstraint>& violated);
 
 std::string toString(SolveStatus s);
-std::string toString(SolverMethod m);  // "al", "ipopt": the names the CLI and scenes use
+std::string toString(SolverMethod m);  // "al", "ipopt", "sqp": the names the CLI and scenes use
 // The method with that name; false if there is none.
 bool parseSolverMethod(const std::string& name, SolverMethod* method);
 

@@ -34,6 +34,7 @@
 #include <chrono>
 #include <string>
 
+#include "solver/augmented_lagrangian.h"
 #include "solver/spacetime_problem.h"
 
 namespace spacetime {
@@ -69,5 +70,9 @@ struct PolishResult {
 // variables) are left alone.
 PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& options,
                           const std::atomic<bool>* cancel = nullptr);
+
+// Adds a polish's passes, solves and phase times to a solve's summary (the methods that run it:
+// the augmented Lagrangian and the SQP).
+void addPolishTo(const PolishResult& result, SolverSummary* summary);
 
 }  // namespace spacetime

@@ -1,0 +1,408 @@
+// The `sqp` method (see sqp.h): elastic SQP steps with an l1-merit line search, finished by the
+// Newton polish, with the augmented Lagrangian as the fallback.
+#include "solver/sqp.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "raw_rows.h"
+#include "solver/newton_polish.h"
+#include "solver/quadratic_program.h"
+
+namespace spacetime {
+namespace {
+
+using raw::Clock;
+using raw::RawEvaluator;
+using raw::RawRows;
+using raw::secondsSince;
+using raw::SpMat;
+using raw::SpRow;
+using raw::Triplets;
+using raw::Variables;
+using raw::Vec;
+
+// Inequalities within this of their bound (or with a multiplier) join a step's program; rows a
+// step then crosses join and it is solved again. Of the jump's 4332 inequality rows 415 are
+// within 0.05 at its optimum and 22 active (docs/design.md, inequality screening).
+constexpr double kMargin = 0.05;
+constexpr int kMaxRounds = 10;  // re-solves of one step's program with the rows it crossed
+// The exact Hessian of the Lagrangian is indefinite far from feasibility (docs/design.md,
+// "Newton steps on the augmented Lagrangian's inner problem"); above this violation the
+// programs use the Gauss-Newton one, J_r^T J_r, convex by construction.
+constexpr double kGaussNewtonAbove = 1e-3;
+// The l1 penalty: exact once above the multipliers (N&W Theorem 17.3); raised tenfold while the
+// elastic programs keep more than half the violation (steering), up to the cap.
+constexpr double kInitialPenalty = 100, kMaxPenalty = 1e8;
+// A hard program's multipliers up to this raise the penalty at any distance (the particle's
+// quadratic program: one step); above it, far from feasibility, they are the linearisation's
+// artefact (3e7 at the jump's default guess) and the elastic program is solved instead.
+constexpr double kHardMultiplierCap = 1e4;
+constexpr double kElasticCurvature = 1e-6;  // keeps the slacks' block of the program definite
+constexpr double kArmijo = 1e-4;
+// Stationarity: |grad f + J^T y|_inf relative to max(1, |grad f|_inf), IPOPT's acceptable level.
+// Where the polish finishes it reaches 1e-8; where it cannot (the jump's optimum near IPOPT's,
+// whose reduced Hessian needs the programs' inertia correction) the steps converge linearly
+// and reach this in 35 steps (1e-8 would take hundreds).
+constexpr double kStationary = 1e-6;
+constexpr double kAtBound = 1e-6;  // an inequality this close to its bound is active for the polish
+
+struct Merit {
+  double f = 0;          // 1/2 |r|^2
+  double violation = 0;  // largest row: |c|, max(0, g)
+  double l1 = 0;         // |c|_1 + |max(0, g)|_1
+};
+
+}  // namespace
+
+SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, const ProgressCallback& callback,
+                       const std::atomic<bool>* cancel) {
+  const Clock::time_point start = Clock::now();
+  SolverOptions al = options;
+  al.method = SolverMethod::AugmentedLagrangian;
+  if (!options.validate().empty() || options.warmStart || !problem.freeEnds().empty()) {
+    SolverSummary s = solveSpacetime(problem, al, callback, cancel);
+    s.method = SolverMethod::Sqp;
+    return s;
+  }
+  const Clock::time_point deadline = options.deadlineFrom(start);
+  const SolutionState initial = problem.state();
+  const Variables vars(problem.ceresProblem());
+  const int threads = std::max(1, options.threads);
+  RawEvaluator evaluator(problem, vars, threads);
+  const int n = vars.tangent, rowCount = evaluator.rows();
+  std::vector<int> objective, equality, inequality;
+  for (int r = 0; r < rowCount; ++r)
+    (evaluator.kind(r) == RowKind::Objective ? objective : evaluator.kind(r) == RowKind::Equality ? equality : inequality)
+        .push_back(r);
+  const int me = static_cast<int>(equality.size());
+  auto meritOf = [&](const Vec& v) {
+    Merit m;
+    m.f = 0.5 * raw::selectValues(v, objective).squaredNorm();
+    for (int r : equality) {
+      m.l1 += std::abs(v[r]);
+      m.violation = std::max(m.violation, std::abs(v[r]));
+    }
+    for (int r : inequality) {
+      m.l1 += std::max(0.0, v[r]);
+      m.violation = std::max(m.violation, v[r]);
+    }
+    return m;
+  };
+
+  SolverSummary summary;
+  summary.method = SolverMethod::Sqp;
+  AugmentedLagrangianState& state = problem.augmentedLagrangian();
+  Vec y = Vec::Zero(rowCount);  // multipliers per row: equalities free, inequalities >= 0
+  double nu = kInitialPenalty, lastViolation = 1e300, lastPolishViolation = 1e300;
+  double qpSeconds = 0, lastReport = 0;
+  QpWorkspace hardWorkspace, elasticWorkspace;  // the two programs' patterns differ
+  std::string why;
+  bool done = false;
+  // Hands the multipliers to the augmented-Lagrangian state, where the polish and any later warm
+  // start read them (lambda + rho c, so rho = 0 makes them the estimates themselves).
+  // The polish holds at zero each inequality with a positive multiplier. An interior point
+  // leaves every row one of about mu/slack (the jump's first polish, holding them all, stepped
+  // to a violation of 3.7), so only the rows at their bound are handed over as active - with
+  // zero multipliers too (weakly active rows): dropping those left the polish's reduced Hessian
+  // indefinite at the jump's optimum, and every Newton step failed.
+  auto handOverMultipliers = [&](double rho, const Vec& values) {
+    const double floor = 1e-8 * std::max(1.0, y.lpNorm<Eigen::Infinity>());
+    for (int r = 0; r < rowCount; ++r) {
+      if (evaluator.kind(r) == RowKind::Objective) continue;
+      if (evaluator.kind(r) == RowKind::Equality) state.lambda[evaluator.multiplier(r)] = y[r];
+      else state.lambda[evaluator.multiplier(r)] = values[r] > -kAtBound ? std::max(y[r], floor) : 0.0;
+    }
+    state.rho = rho;
+  };
+
+  // The Newton polish from the multipliers in the state; on failure it restores its start.
+  auto polish = [&] {
+    PolishOptions po;
+    po.tolerance = options.tolerance;
+    po.maxIterations = options.maxPolishIterations;
+    po.threads = threads;
+    po.deadline = deadline;
+    const PolishResult polished = polishNewton(problem, po, cancel);
+    addPolishTo(polished, &summary);
+    return polished;
+  };
+
+  RawRows rows;
+  if (!evaluator.evaluate(&rows, true)) why = "the rows at the starting point are not finite";
+  for (int step = 0; why.empty() && !done; ++step) {
+    const Merit merit = meritOf(rows.values);
+    const SpRow Jr = raw::selectRows(rows.jacobian, objective), A = raw::selectRows(rows.jacobian, equality);
+    const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, equality);
+    const Vec g = raw::selectValues(rows.values, inequality);
+    const Vec grad = Jr.transpose() * r;
+    const double kkt = (grad + rows.jacobian.transpose() * y).lpNorm<Eigen::Infinity>() /
+                       std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+    summary.sqpSteps = step;
+    if (callback && secondsSince(start) - lastReport >= 0.1) {
+      lastReport = secondsSince(start);
+      IterationReport report;
+      report.iterations = step;
+      report.objective = 2 * merit.f;  // the problem's objective is |r|^2
+      report.maxViolation = merit.violation;
+      report.rho = nu;
+      if (!callback(report)) {
+        why = "cancelled";
+        break;
+      }
+    }
+    if (merit.violation <= options.tolerance && kkt <= kStationary) {
+      handOverMultipliers(std::min(options.maxPenalty, options.nearFeasiblePenalty), rows.values);
+      summary.reason = "constraints within tolerance and the KKT conditions met after " + std::to_string(step) + " SQP steps";
+      done = true;
+      // From here the polish, with the active set a warm start would take (lambda + rho c > 0),
+      // finishes what the linearly converging tail left: the jump 28.1005 -> 28.0987.
+      const PolishResult polished = polish();
+      if (polished.converged) {
+        summary.polished = true;
+        summary.reason += " and " + std::to_string(polished.iterations) + " Newton steps with the exact Hessian";
+      }
+      break;
+    }
+    // Near feasibility the polish's Newton steps on the active rows finish quadratically, where
+    // the programs' inertia correction (a multiple of the identity wherever the Hessian is not
+    // convex on the margin's directions) would leave a linearly converging tail: the jump took
+    // 23 more programs from a violation of 3e-5 to converge.
+    if (options.newtonPolish && merit.violation <= options.polishBelow && merit.violation <= 0.1 * lastPolishViolation) {
+      lastPolishViolation = merit.violation;
+      const std::vector<double> saved = state.lambda;
+      handOverMultipliers(0, rows.values);
+      const PolishResult polished = polish();
+      if (polished.converged) {
+        state.rho = std::min(options.maxPenalty, options.nearFeasiblePenalty);
+        summary.polished = true;
+        summary.reason = "constraints within tolerance and the KKT conditions met after " + std::to_string(step) +
+                         " SQP steps and " + std::to_string(polished.iterations) + " Newton steps with the exact Hessian";
+        done = true;
+        break;
+      }
+      state.lambda = saved;
+    }
+    if (step >= options.sqpMaxSteps) {
+      why = "no KKT point within " + std::to_string(options.sqpMaxSteps) + " steps";
+      break;
+    }
+    if (cancel && cancel->load()) {
+      why = "cancelled";
+      break;
+    }
+    if (Clock::now() > deadline) {
+      why = "out of time";
+      break;
+    }
+
+    // The Hessian of the Lagrangian 1/2 |r|^2 + y.c (Gauss-Newton far from feasibility).
+    Clock::time_point phase = Clock::now();
+    const bool gaussNewton = merit.violation > kGaussNewtonAbove;
+    Triplets ht;
+    if (gaussNewton) {
+      for (int i = 0; i < n; ++i) ht.emplace_back(i, i, kElasticCurvature);
+    } else {
+      Vec w = y;
+      for (int row : objective) w[row] = rows.values[row];
+      ht = evaluator.curvature(w, threads);
+    }
+    const SpMat G = SpMat(Jr.transpose()) * Jr;
+    for (int k = 0; k < G.outerSize(); ++k)
+      for (SpMat::InnerIterator e(G, k); e; ++e)
+        if (e.row() >= e.col()) ht.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    summary.hessianSeconds += secondsSince(phase);
+
+    std::vector<int> held;  // indices into `inequality`
+    for (size_t i = 0; i < inequality.size(); ++i)
+      if (g[static_cast<Eigen::Index>(i)] > -kMargin || y[inequality[i]] > 0) held.push_back(static_cast<int>(i));
+    const SpRow Cfull = raw::selectRows(rows.jacobian, inequality);
+    // The program: near feasibility hard rows first; elastic when that has no point or needs
+    // multipliers above the penalty (far away they reach 3e7, which would drown the objective).
+    bool hard = true;
+    QpResult qp;
+    QuadraticProgram program;
+    std::vector<int> heldRows;
+    double elasticSum = 0;
+    phase = Clock::now();
+    bool solved = false;
+    for (int round = 0; round < kMaxRounds && !solved; ++round) {
+      heldRows.clear();
+      for (int i : held) heldRows.push_back(inequality[i]);
+      const SpRow C = raw::selectRows(rows.jacobian, heldRows);
+      const Vec gh = raw::selectValues(rows.values, heldRows);
+      std::vector<int> elastic;  // indices into held: the violated rows
+      if (!hard)
+        for (size_t i = 0; i < held.size(); ++i)
+          if (gh[static_cast<Eigen::Index>(i)] > 0) elastic.push_back(static_cast<int>(i));
+      // Variables: the step, then (elastic) p and q >= 0 per equality (c + A d = p - q) and t >= 0
+      // per violated inequality (g + C d <= t), each weighted nu in the objective.
+      const int pe = hard ? 0 : me, ke = static_cast<int>(elastic.size()), mh = static_cast<int>(held.size());
+      const int N = n + 2 * pe + ke;
+      Triplets t = ht;
+      for (int i = n; i < N; ++i) t.emplace_back(i, i, kElasticCurvature);
+      program.hessian.resize(N, N);
+      program.hessian.setFromTriplets(t.begin(), t.end());
+      program.gradient = Vec::Constant(N, nu);
+      program.gradient.head(n) = grad;
+      Triplets ta;
+      for (int row = 0; row < A.outerSize(); ++row)
+        for (SpRow::InnerIterator e(A, row); e; ++e) ta.emplace_back(row, static_cast<int>(e.col()), e.value());
+      for (int i = 0; i < pe; ++i) {
+        ta.emplace_back(i, n + i, -1.0);
+        ta.emplace_back(i, n + pe + i, 1.0);
+      }
+      program.equalities.resize(me, N);
+      program.equalities.setFromTriplets(ta.begin(), ta.end());
+      program.equalityTargets = -c;
+      Triplets tc;
+      for (int row = 0; row < C.outerSize(); ++row)
+        for (SpRow::InnerIterator e(C, row); e; ++e) tc.emplace_back(row, static_cast<int>(e.col()), e.value());
+      for (int j = 0; j < ke; ++j) tc.emplace_back(elastic[j], n + 2 * pe + j, -1.0);
+      for (int j = 0; j < 2 * pe + ke; ++j) tc.emplace_back(mh + j, n + j, -1.0);  // slacks >= 0
+      program.inequalities.resize(mh + 2 * pe + ke, N);
+      program.inequalities.setFromTriplets(tc.begin(), tc.end());
+      program.inequalityBounds = Vec::Zero(mh + 2 * pe + ke);
+      program.inequalityBounds.head(mh) = -gh;
+      QpOptions qo;
+      qo.maxIterations = 100;
+      qo.convex = gaussNewton;
+      qp = solveQuadraticProgram(program, qo, hard ? &hardWorkspace : &elasticWorkspace);
+      if (hard) {
+        const double largest = std::max(qp.y.lpNorm<Eigen::Infinity>(), qp.z.size() ? qp.z.lpNorm<Eigen::Infinity>() : 0.0);
+        if (qp.converged && largest > nu && (merit.violation < kGaussNewtonAbove || largest <= kHardMultiplierCap))
+          nu = 1.1 * largest;
+        if (!qp.converged || largest > nu) {
+          hard = false;
+          --round;
+          continue;
+        }
+      }
+      elasticSum = hard ? 0.0 : qp.x.tail(2 * pe + ke).sum();
+      // Rows outside the program the step crosses join it, and it is solved again.
+      const Vec linear = g + Cfull * qp.x.head(n);
+      std::vector<char> isHeld(inequality.size(), 0);
+      for (int i : held) isHeld[i] = 1;
+      bool added = false;
+      for (size_t i = 0; i < inequality.size(); ++i)
+        if (!isHeld[i] && linear[static_cast<Eigen::Index>(i)] > 1e-9) {
+          held.push_back(static_cast<int>(i));
+          added = true;
+        }
+      std::sort(held.begin(), held.end());
+      if (added) continue;
+      // Steering: the elastic program keeps most of the violation (the penalty is too low for
+      // the constraints to win against the objective): raise the penalty and solve again.
+      const bool stalled = merit.violation > options.tolerance && merit.violation > 0.99 * lastViolation &&
+                           elasticSum > 0.5 * merit.l1;
+      if (stalled && nu < kMaxPenalty) {
+        nu *= 10;
+        --round;
+        continue;
+      }
+      solved = true;
+    }
+    qpSeconds += secondsSince(phase);
+    if (!solved) {
+      why = "a step's quadratic program kept gaining rows";
+      break;
+    }
+    const Vec d = qp.x.head(n);
+    Vec yNew = Vec::Zero(rowCount);
+    for (int i = 0; i < me; ++i) yNew[equality[i]] = qp.y[i];
+    for (size_t i = 0; i < heldRows.size(); ++i) yNew[heldRows[i]] = qp.z[static_cast<Eigen::Index>(i)];
+
+    // Line search on the l1 merit; its directional derivative along d is grad.d - nu (l1 - the
+    // slacks' sum) (N&W eq. 18.29). A full step the merit rejects first tries the second-order
+    // correction: the same program with the rows' values at the trial point less their linear
+    // change (N&W 18.3).
+    phase = Clock::now();
+    const double phi0 = merit.f + nu * merit.l1;
+    const double slope = std::min(0.0, grad.dot(d) - nu * (merit.l1 - elasticSum));
+    const std::vector<double> x0 = vars.save();
+    RawRows trial;
+    bool accepted = false;
+    double alpha = 1;
+    for (int ls = 0; ls < 30 && !accepted; ++ls, alpha *= 0.5) {
+      vars.plus(x0, alpha * d);
+      if (!evaluator.evaluate(&trial, true)) continue;
+      Merit m = meritOf(trial.values);
+      if (m.f + nu * m.l1 <= phi0 + kArmijo * alpha * slope) {
+        accepted = true;
+        break;
+      }
+      if (ls > 0) continue;
+      QuadraticProgram corrected = program;
+      const SpRow At = raw::selectRows(rows.jacobian, equality), Ct = raw::selectRows(rows.jacobian, heldRows);
+      corrected.equalityTargets = -(raw::selectValues(trial.values, equality) - At * d);
+      corrected.inequalityBounds.head(static_cast<Eigen::Index>(heldRows.size())) =
+          -(raw::selectValues(trial.values, heldRows) - Ct * d);
+      QpOptions qo;
+      qo.maxIterations = 100;
+      qo.convex = gaussNewton;
+      const Clock::time_point q0 = Clock::now();
+      const QpResult soc = solveQuadraticProgram(corrected, qo, hard ? &hardWorkspace : &elasticWorkspace);
+      qpSeconds += secondsSince(q0);
+      if (!soc.converged) continue;
+      RawRows correctedRows;
+      vars.plus(x0, soc.x.head(n));
+      if (!evaluator.evaluate(&correctedRows, true)) continue;
+      m = meritOf(correctedRows.values);
+      if (m.f + nu * m.l1 <= phi0 + kArmijo * slope) {
+        trial = std::move(correctedRows);
+        accepted = true;
+        break;
+      }
+    }
+    summary.lineSearchSeconds += secondsSince(phase);
+    if (!accepted) {
+      vars.load(x0);
+      why = "no step lowered the l1 merit";
+      break;
+    }
+    y += alpha * (yNew - y);
+    lastViolation = merit.violation;
+    rows = std::move(trial);
+  }
+  summary.qpSeconds = qpSeconds;
+  summary.sqpSeconds = secondsSince(start);
+
+  if (done) {
+    problem.syncFreeEnds();
+    const ProblemMeasures m = measure(problem);
+    summary.status = SolveStatus::Converged;
+    summary.converged = true;
+    summary.objective = m.objective;
+    summary.maxViolation = m.maxViolation;
+    summary.worstConstraint = m.worstConstraint;
+    summary.solveSeconds = secondsSince(start);
+    return summary;
+  }
+  // The steps failed: the augmented Lagrangian solves from the starting point instead.
+  problem.restore(initial);
+  if (why == "cancelled") {
+    const ProblemMeasures m = measure(problem);
+    summary.status = SolveStatus::Cancelled;
+    summary.reason = "cancelled by the user; the starting motion is kept";
+    summary.objective = m.objective;
+    summary.maxViolation = m.maxViolation;
+    summary.worstConstraint = m.worstConstraint;
+    summary.solveSeconds = secondsSince(start);
+    return summary;
+  }
+  al.spentSeconds += secondsSince(start);
+  SolverSummary fallback = solveSpacetime(problem, al, callback, cancel);
+  fallback.method = SolverMethod::Sqp;
+  fallback.sqpSteps = summary.sqpSteps;
+  fallback.sqpSeconds = summary.sqpSeconds;
+  fallback.qpSeconds = summary.qpSeconds;
+  fallback.newtonSteps += summary.newtonSteps;
+  fallback.newtonSolves += summary.newtonSolves;
+  fallback.reason = "the SQP stopped after " + std::to_string(summary.sqpSteps) + " steps (" + why +
+                    "); the augmented Lagrangian from the starting motion: " + fallback.reason;
+  fallback.solveSeconds = secondsSince(start);
+  return fallback;
+}
+
+}  // namespace spacetime
