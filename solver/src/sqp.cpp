@@ -96,7 +96,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   AugmentedLagrangianState& state = problem.augmentedLagrangian();
   Vec y = Vec::Zero(rowCount);  // multipliers per row: equalities free, inequalities >= 0
   double nu = kInitialPenalty, lastViolation = 1e300, lastPolishViolation = 1e300;
-  double qpSeconds = 0, lastReport = 0;
+  double lastReport = 0;
   QpWorkspace hardWorkspace, elasticWorkspace;  // the two programs' patterns differ
   std::string why;
   bool done = false;
@@ -221,16 +221,20 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     // The program: near feasibility hard rows first; elastic when that has no point or needs
     // multipliers above the penalty (far away they reach 3e7, which would drown the objective).
     bool hard = true;
+    QpOptions programOptions;
+    programOptions.maxIterations = 100;
+    programOptions.convex = gaussNewton;
     QpResult qp;
     QuadraticProgram program;
     std::vector<int> heldRows;
+    SpRow C;  // the held rows' Jacobian, of the last round's program
     double elasticSum = 0;
     phase = Clock::now();
     bool solved = false;
     for (int round = 0; round < kMaxRounds && !solved; ++round) {
       heldRows.clear();
       for (int i : held) heldRows.push_back(inequality[i]);
-      const SpRow C = raw::selectRows(rows.jacobian, heldRows);
+      C = raw::selectRows(rows.jacobian, heldRows);
       const Vec gh = raw::selectValues(rows.values, heldRows);
       std::vector<int> elastic;  // indices into held: the violated rows
       if (!hard)
@@ -265,10 +269,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       program.inequalities.setFromTriplets(tc.begin(), tc.end());
       program.inequalityBounds = Vec::Zero(mh + 2 * pe + ke);
       program.inequalityBounds.head(mh) = -gh;
-      QpOptions qo;
-      qo.maxIterations = 100;
-      qo.convex = gaussNewton;
-      qp = solveQuadraticProgram(program, qo, hard ? &hardWorkspace : &elasticWorkspace);
+      qp = solveQuadraticProgram(program, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
       if (hard) {
         const double largest = std::max(qp.y.lpNorm<Eigen::Infinity>(), qp.z.size() ? qp.z.lpNorm<Eigen::Infinity>() : 0.0);
         if (qp.converged && largest > nu && (merit.violation < kGaussNewtonAbove || largest <= kHardMultiplierCap))
@@ -303,7 +304,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       }
       solved = true;
     }
-    qpSeconds += secondsSince(phase);
+    summary.qpSeconds += secondsSince(phase);
     if (!solved) {
       why = "a step's quadratic program kept gaining rows";
       break;
@@ -334,16 +335,12 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       }
       if (ls > 0) continue;
       QuadraticProgram corrected = program;
-      const SpRow At = raw::selectRows(rows.jacobian, equality), Ct = raw::selectRows(rows.jacobian, heldRows);
-      corrected.equalityTargets = -(raw::selectValues(trial.values, equality) - At * d);
+      corrected.equalityTargets = -(raw::selectValues(trial.values, equality) - A * d);
       corrected.inequalityBounds.head(static_cast<Eigen::Index>(heldRows.size())) =
-          -(raw::selectValues(trial.values, heldRows) - Ct * d);
-      QpOptions qo;
-      qo.maxIterations = 100;
-      qo.convex = gaussNewton;
+          -(raw::selectValues(trial.values, heldRows) - C * d);
       const Clock::time_point q0 = Clock::now();
-      const QpResult soc = solveQuadraticProgram(corrected, qo, hard ? &hardWorkspace : &elasticWorkspace);
-      qpSeconds += secondsSince(q0);
+      const QpResult soc = solveQuadraticProgram(corrected, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
+      summary.qpSeconds += secondsSince(q0);
       if (!soc.converged) continue;
       RawRows correctedRows;
       vars.plus(x0, soc.x.head(n));
@@ -365,31 +362,27 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     lastViolation = merit.violation;
     rows = std::move(trial);
   }
-  summary.qpSeconds = qpSeconds;
   summary.sqpSeconds = secondsSince(start);
 
-  if (done) {
-    problem.syncFreeEnds();
+  auto finish = [&](SolveStatus status) {
     const ProblemMeasures m = measure(problem);
-    summary.status = SolveStatus::Converged;
-    summary.converged = true;
+    summary.status = status;
+    summary.converged = status == SolveStatus::Converged;
     summary.objective = m.objective;
     summary.maxViolation = m.maxViolation;
     summary.worstConstraint = m.worstConstraint;
     summary.solveSeconds = secondsSince(start);
     return summary;
+  };
+  if (done) {
+    problem.syncFreeEnds();
+    return finish(SolveStatus::Converged);
   }
   // The steps failed: the augmented Lagrangian solves from the starting point instead.
   problem.restore(initial);
   if (why == "cancelled") {
-    const ProblemMeasures m = measure(problem);
-    summary.status = SolveStatus::Cancelled;
     summary.reason = "cancelled by the user; the starting motion is kept";
-    summary.objective = m.objective;
-    summary.maxViolation = m.maxViolation;
-    summary.worstConstraint = m.worstConstraint;
-    summary.solveSeconds = secondsSince(start);
-    return summary;
+    return finish(SolveStatus::Cancelled);
   }
   al.spentSeconds += secondsSince(start);
   SolverSummary fallback = solveSpacetime(problem, al, callback, cancel);
@@ -399,6 +392,12 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   fallback.qpSeconds = summary.qpSeconds;
   fallback.newtonSteps += summary.newtonSteps;
   fallback.newtonSolves += summary.newtonSolves;
+  fallback.jacobianSeconds += summary.jacobianSeconds;
+  fallback.polishSeconds += summary.polishSeconds;
+  fallback.polishEvaluationSeconds += summary.polishEvaluationSeconds;
+  fallback.hessianSeconds += summary.hessianSeconds;
+  fallback.factorisationSeconds += summary.factorisationSeconds;
+  fallback.lineSearchSeconds += summary.lineSearchSeconds;
   fallback.reason = "the SQP stopped after " + std::to_string(summary.sqpSteps) + " steps (" + why +
                     "); the augmented Lagrangian from the starting motion: " + fallback.reason;
   fallback.solveSeconds = secondsSince(start);
