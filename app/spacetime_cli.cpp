@@ -2,7 +2,7 @@
 //
 //   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]
 //                       [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet] [--no-polish]
-//                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt|sqp]
+//                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt|sqp|witkin-kass]
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
 // solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
@@ -37,7 +37,7 @@ namespace {
   "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]\n" \
   "                          [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet]\n" \
   "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n" \
-  "                          [--method al|ipopt|sqp]\n"
+  "                          [--method al|ipopt|sqp|witkin-kass]\n"
 
 constexpr const char* kHelp =
     SPACETIME_CLI_USAGE
@@ -139,7 +139,7 @@ int run(int argc, char** argv) {
     else if (a == "--method" && i + 1 < argc) {
       method = argv[++i];
       SolverMethod m;
-      if (!parseSolverMethod(method, &m)) return usage("--method must be al, ipopt or sqp");
+      if (!parseSolverMethod(method, &m)) return usage("--method must be al, ipopt, sqp or witkin-kass");
     }
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (scenePath.empty()) scenePath = a;

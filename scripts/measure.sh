@@ -7,12 +7,52 @@
 #
 #   scripts/measure.sh            everything
 #   scripts/measure.sh benchmarks the benchmarks only
+#   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 15 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli > /dev/null
 bench=build/tests/benchmarks
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+
+# The methods side by side: every shipped scene, then the ladder's required rungs (al's own
+# figures are in the ladder table above).
+methods_tables() {
+  echo
+  echo "## The methods on the shipped scenes (spacetime-cli solve --method M, 2 threads, single runs)"
+  echo
+  echo "| scene | method | exit | objective | SQP or projected steps (s in programs) | LM iterations + Newton passes | seconds |"
+  echo "|---|---|---|---|---|---|---|"
+  for name in particle particle_gravity luxo_jump luxo_hurdle luxo_heavy luxo_3d luxo_power_formula; do
+    for method in al sqp witkin-kass; do
+      method_row "resources/scenes/$name.json" "$name" "$method"
+    done
+  done
+  echo
+  echo "## The ladder's required rungs by method (spacetime-cli solve --method M, 2 threads, single runs)"
+  echo
+  echo "| scene | method | exit | objective | SQP or projected steps (s in programs) | LM iterations + Newton passes | seconds |"
+  echo "|---|---|---|---|---|---|---|"
+  for name in luxo_hurdle_double luxo_jump_0.3m luxo_jump_0.6m luxo_jump_0.9m luxo_jump_1.2m luxo_jump_1.5m; do
+    for method in sqp witkin-kass; do
+      method_row "tests/scenes/ladder/$name.json" "$name" "$method"
+    done
+  done
+}
+method_row() {
+  set +e
+  build/app/spacetime-cli solve "$1" --out "$tmp/m_$2_$3" --method "$3" --quiet --max-seconds 300 2> /dev/null
+  local status=$?
+  set -e
+  python3 - "$tmp/m_$2_$3/summary.json" "$2" "$3" "$status" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+total = sum(a["seconds"] for a in s.get("refinement", [])) or s["solve_seconds"]
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {s['objective']:.6f} | {s['sqp_steps']} ({s['qp_seconds']:.2f}) | "
+      f"{s['iterations']} + {s['newton_steps']} | {total:.2f} |")
+PY
+}
+[ "${1:-}" = methods ] && { methods_tables; exit 0; }
 
 echo "## Solves from the default guess (solve_benchmark, medians of 5)"
 echo
@@ -137,23 +177,4 @@ print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6g} | {tried} | {tota
 PY
 done
 
-echo
-echo "## The methods on the shipped scenes (spacetime-cli solve --method M, 2 threads, single runs)"
-echo
-echo "| scene | method | exit | objective | SQP steps (s in programs) | LM iterations + Newton passes | seconds |"
-echo "|---|---|---|---|---|---|---|"
-for name in particle particle_gravity luxo_jump luxo_hurdle luxo_heavy luxo_3d luxo_power_formula; do
-  for method in al sqp; do
-    set +e
-    build/app/spacetime-cli solve "resources/scenes/$name.json" --out "$tmp/m_${name}_$method" --method "$method" \
-      --quiet --max-seconds 300 2> /dev/null
-    status=$?
-    set -e
-    python3 - "$tmp/m_${name}_$method/summary.json" "$name" "$method" "$status" <<'PY'
-import json, sys
-s = json.load(open(sys.argv[1]))
-print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {s['objective']:.6f} | {s['sqp_steps']} ({s['qp_seconds']:.2f}) | "
-      f"{s['iterations']} + {s['newton_steps']} | {s['solve_seconds']:.2f} |")
-PY
-  done
-done
+methods_tables

@@ -532,7 +532,7 @@ Scene readScene(const Reader& r, const json& root) {
       s.solver.method = r.string(t["method"], "solver.method");
       if (std::find(std::begin(SolverSpec::kMethods), std::end(SolverSpec::kMethods), s.solver.method) ==
           std::end(SolverSpec::kMethods))
-        r.badValue("solver.method", t["method"], "\"al\", \"ipopt\" or \"sqp\"");
+        r.badValue("solver.method", t["method"], "\"al\", \"ipopt\", \"sqp\" or \"witkin-kass\"");
     }
     if (t.contains("bodiesAboveGround"))
       s.solver.bodiesAboveGround = r.boolean(t["bodiesAboveGround"], "solver.bodiesAboveGround");

@@ -12,6 +12,7 @@
 #include "solver/interior_point.h"
 #include "solver/newton_polish.h"
 #include "solver/sqp.h"
+#include "solver/witkin_kass.h"
 #include "solver/restoration.h"
 
 namespace spacetime {
@@ -150,13 +151,14 @@ std::string toString(SolverMethod m) {
   switch (m) {
     case SolverMethod::InteriorPoint: return "ipopt";
     case SolverMethod::Sqp: return "sqp";
+    case SolverMethod::WitkinKass: return "witkin-kass";
     case SolverMethod::AugmentedLagrangian: break;
   }
   return "al";
 }
 
 bool parseSolverMethod(const std::string& name, SolverMethod* method) {
-  for (SolverMethod m : {SolverMethod::AugmentedLagrangian, SolverMethod::InteriorPoint, SolverMethod::Sqp})
+  for (SolverMethod m : {SolverMethod::AugmentedLagrangian, SolverMethod::InteriorPoint, SolverMethod::Sqp, SolverMethod::WitkinKass})
     if (name == toString(m)) {
       *method = m;
       return true;
@@ -319,6 +321,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   }
   if (options.method == SolverMethod::InteriorPoint) return solveInteriorPoint(problem, options, callback, cancel);
   if (options.method == SolverMethod::Sqp) return solveSqp(problem, options, callback, cancel);
+  if (options.method == SolverMethod::WitkinKass) return solveWitkinKass(problem, options, callback, cancel);
   AugmentedLagrangianState& al = problem.augmentedLagrangian();
   const bool coldStart = !options.warmStart || !(al.rho > 0);
   if (coldStart) std::fill(al.lambda.begin(), al.lambda.end(), 0.0);

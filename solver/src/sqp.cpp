@@ -6,18 +6,18 @@
 #include <chrono>
 #include <cmath>
 
-#include "raw_rows.h"
-#include "solver/newton_polish.h"
+#include "program_steps.h"
 #include "solver/quadratic_program.h"
 
 namespace spacetime {
 namespace {
 
+using raw::appendTriplets;
 using raw::Clock;
+using raw::kAtBound;
 using raw::RawEvaluator;
 using raw::RawRows;
 using raw::secondsSince;
-using raw::SpMat;
 using raw::SpRow;
 using raw::Triplets;
 using raw::Variables;
@@ -46,7 +46,6 @@ constexpr double kArmijo = 1e-4;
 // whose reduced Hessian needs the programs' inertia correction) the steps converge linearly
 // and reach this in 35 steps (1e-8 would take hundreds).
 constexpr double kStationary = 1e-6;
-constexpr double kAtBound = 1e-6;  // an inequality this close to its bound is active for the polish
 
 struct Merit {
   double f = 0;          // 1/2 |r|^2
@@ -72,10 +71,8 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   const int threads = std::max(1, options.threads);
   RawEvaluator evaluator(problem, vars, threads);
   const int n = vars.tangent, rowCount = evaluator.rows();
-  std::vector<int> objective, equality, inequality;
-  for (int r = 0; r < rowCount; ++r)
-    (evaluator.kind(r) == RowKind::Objective ? objective : evaluator.kind(r) == RowKind::Equality ? equality : inequality)
-        .push_back(r);
+  const raw::RowKinds kinds(evaluator);
+  const std::vector<int>&objective = kinds.objective, &equality = kinds.equality, &inequality = kinds.inequality;
   const int me = static_cast<int>(equality.size());
   auto meritOf = [&](const Vec& v) {
     Merit m;
@@ -100,34 +97,10 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   QpWorkspace hardWorkspace, elasticWorkspace;  // the two programs' patterns differ
   std::string why;
   bool done = false;
-  // Hands the multipliers to the augmented-Lagrangian state, where the polish and any later warm
-  // start read them (lambda + rho c, so rho = 0 makes them the estimates themselves).
-  // The polish holds at zero each inequality with a positive multiplier. An interior point
-  // leaves every row one of about mu/slack (the jump's first polish, holding them all, stepped
-  // to a violation of 3.7), so only the rows at their bound are handed over as active - with
-  // zero multipliers too (weakly active rows): dropping those left the polish's reduced Hessian
-  // indefinite at the jump's optimum, and every Newton step failed.
   auto handOverMultipliers = [&](double rho, const Vec& values) {
-    const double floor = 1e-8 * std::max(1.0, y.lpNorm<Eigen::Infinity>());
-    for (int r = 0; r < rowCount; ++r) {
-      if (evaluator.kind(r) == RowKind::Objective) continue;
-      if (evaluator.kind(r) == RowKind::Equality) state.lambda[evaluator.multiplier(r)] = y[r];
-      else state.lambda[evaluator.multiplier(r)] = values[r] > -kAtBound ? std::max(y[r], floor) : 0.0;
-    }
-    state.rho = rho;
+    raw::handOverMultipliers(evaluator, y, values, rho, &state);
   };
-
-  // The Newton polish from the multipliers in the state; on failure it restores its start.
-  auto polish = [&] {
-    PolishOptions po;
-    po.tolerance = options.tolerance;
-    po.maxIterations = options.maxPolishIterations;
-    po.threads = threads;
-    po.deadline = deadline;
-    const PolishResult polished = polishNewton(problem, po, cancel);
-    addPolishTo(polished, &summary);
-    return polished;
-  };
+  auto polish = [&] { return raw::polishInto(problem, options, threads, deadline, cancel, &summary); };
 
   RawRows rows;
   if (!evaluator.evaluate(&rows, true)) why = "the rows at the starting point are not finite";
@@ -208,10 +181,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       for (int row : objective) w[row] = rows.values[row];
       ht = evaluator.curvature(w, threads);
     }
-    const SpMat G = SpMat(Jr.transpose()) * Jr;
-    for (int k = 0; k < G.outerSize(); ++k)
-      for (SpMat::InnerIterator e(G, k); e; ++e)
-        if (e.row() >= e.col()) ht.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    raw::appendGaussNewton(Jr, &ht);
     summary.hessianSeconds += secondsSince(phase);
 
     std::vector<int> held;  // indices into `inequality`
@@ -251,8 +221,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       program.gradient = Vec::Constant(N, nu);
       program.gradient.head(n) = grad;
       Triplets ta;
-      for (int row = 0; row < A.outerSize(); ++row)
-        for (SpRow::InnerIterator e(A, row); e; ++e) ta.emplace_back(row, static_cast<int>(e.col()), e.value());
+      appendTriplets(A, 0, 0, &ta);
       for (int i = 0; i < pe; ++i) {
         ta.emplace_back(i, n + i, -1.0);
         ta.emplace_back(i, n + pe + i, 1.0);
@@ -261,8 +230,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       program.equalities.setFromTriplets(ta.begin(), ta.end());
       program.equalityTargets = -c;
       Triplets tc;
-      for (int row = 0; row < C.outerSize(); ++row)
-        for (SpRow::InnerIterator e(C, row); e; ++e) tc.emplace_back(row, static_cast<int>(e.col()), e.value());
+      appendTriplets(C, 0, 0, &tc);
       for (int j = 0; j < ke; ++j) tc.emplace_back(elastic[j], n + 2 * pe + j, -1.0);
       for (int j = 0; j < 2 * pe + ke; ++j) tc.emplace_back(mh + j, n + j, -1.0);  // slacks >= 0
       program.inequalities.resize(mh + 2 * pe + ke, N);
@@ -282,17 +250,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       }
       elasticSum = hard ? 0.0 : qp.x.tail(2 * pe + ke).sum();
       // Rows outside the program the step crosses join it, and it is solved again.
-      const Vec linear = g + Cfull * qp.x.head(n);
-      std::vector<char> isHeld(inequality.size(), 0);
-      for (int i : held) isHeld[i] = 1;
-      bool added = false;
-      for (size_t i = 0; i < inequality.size(); ++i)
-        if (!isHeld[i] && linear[static_cast<Eigen::Index>(i)] > 1e-9) {
-          held.push_back(static_cast<int>(i));
-          added = true;
-        }
-      std::sort(held.begin(), held.end());
-      if (added) continue;
+      if (raw::holdCrossedRows(g + Cfull * qp.x.head(n), &held)) continue;
       // Steering: the elastic program keeps most of the violation (the penalty is too low for
       // the constraints to win against the objective): raise the penalty and solve again.
       const bool stalled = merit.violation > options.tolerance && merit.violation > 0.99 * lastViolation &&
@@ -387,17 +345,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   al.spentSeconds += secondsSince(start);
   SolverSummary fallback = solveSpacetime(problem, al, callback, cancel);
   fallback.method = SolverMethod::Sqp;
-  fallback.sqpSteps = summary.sqpSteps;
-  fallback.sqpSeconds = summary.sqpSeconds;
-  fallback.qpSeconds = summary.qpSeconds;
-  fallback.newtonSteps += summary.newtonSteps;
-  fallback.newtonSolves += summary.newtonSolves;
-  fallback.jacobianSeconds += summary.jacobianSeconds;
-  fallback.polishSeconds += summary.polishSeconds;
-  fallback.polishEvaluationSeconds += summary.polishEvaluationSeconds;
-  fallback.hessianSeconds += summary.hessianSeconds;
-  fallback.factorisationSeconds += summary.factorisationSeconds;
-  fallback.lineSearchSeconds += summary.lineSearchSeconds;
+  raw::addPhaseTo(summary, &fallback);
   fallback.reason = "the SQP stopped after " + std::to_string(summary.sqpSteps) + " steps (" + why +
                     "); the augmented Lagrangian from the starting motion: " + fallback.reason;
   fallback.solveSeconds = secondsSince(start);

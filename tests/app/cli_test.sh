@@ -80,9 +80,14 @@ python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); [t.update(freeEn
 [ "$status" -eq 2 ] || fail "--method ipopt with a free end exited $status, expected 2"
 grep -q "does not handle free contact ends" "$tmp/free_ip.err" || fail "unclear free-end error: $(cat "$tmp/free_ip.err")"
 [ ! -e "$tmp/free_ip" ] || fail "the refused free-end solve wrote outputs"
+for method in sqp witkin-kass; do
+  "$cli" solve "$scenes/particle.json" --out "$tmp/$method" --method $method --quiet 2>"$tmp/$method.err" || fail "--method $method exited $?: $(cat "$tmp/$method.err")"
+  grep -q "\"method\": \"$method\"" "$tmp/$method/summary.json" || fail "summary.json does not name the method $method"
+  grep -q '"valid": true' "$tmp/$method/summary.json" || fail "--method $method: the particle is not valid"
+done
 "$cli" solve "$scenes/particle.json" --out "$tmp/nomethod" --method newton 2>"$tmp/nomethod.err"; status=$?
 [ "$status" -eq 2 ] || fail "--method newton exited $status, expected 2"
-grep -q -- "--method must be al, ipopt or sqp" "$tmp/nomethod.err" || fail "unclear --method error: $(cat "$tmp/nomethod.err")"
+grep -q -- "--method must be al, ipopt, sqp or witkin-kass" "$tmp/nomethod.err" || fail "unclear --method error: $(cat "$tmp/nomethod.err")"
 
 sed 's/"mass": 1.0/"mass": -1.0/' "$scenes/particle.json" > "$tmp/bad.json"
 "$cli" solve "$tmp/bad.json" --out "$tmp/bad" --quiet 2>"$tmp/bad.err"

@@ -67,6 +67,13 @@ TEST(SceneIo, SolverMethodFrameRateAndLegBubblesRoundTrip) {
   EXPECT_EQ(again.scene->solver.method, "ipopt");
   EXPECT_EQ(again.scene->frameRate, 30);
   EXPECT_TRUE(again.scene->transcription.legBubbles);
+  for (const char* method : SolverSpec::kMethods) {
+    scene.solver.method = method;
+    const SceneLoadResult each = parseScene(sceneToJson(scene), "roundtrip");
+    ASSERT_TRUE(each.scene) << each.error;
+    EXPECT_EQ(each.scene->solver.method, method);
+  }
+  scene.solver.method = "ipopt";
   std::string text = sceneToJson(scene);
   const size_t flag = text.find("true", text.find("\"legBubbles\""));
   ASSERT_NE(flag, std::string::npos);
@@ -173,7 +180,7 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
       {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
-      {minimalWith(body, "[]", R"("solver": {"method": "sqp2"},)"), "solver.method': value \"sqp2\" is not allowed; expected \"al\", \"ipopt\" or \"sqp\""},
+      {minimalWith(body, "[]", R"("solver": {"method": "sqp2"},)"), "solver.method': value \"sqp2\" is not allowed; expected \"al\", \"ipopt\", \"sqp\" or \"witkin-kass\""},
       // A number beyond a double (nlohmann's out_of_range, which used to abort).
       {minimalWith(R"({"id": "base", "mass": 1e999})"), "not valid JSON"},
       // 100 000 levels of nesting (parsing and printing them overflowed the stack), and a few

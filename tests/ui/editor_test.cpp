@@ -28,6 +28,7 @@
 #include <QPushButton>
 #include <QtTest>
 #include <cstring>
+#include <iterator>
 #include <map>
 #include <set>
 #include <QChartView>
@@ -731,6 +732,7 @@ class EditorTest : public QObject {
     QVERIFY(doc.scene().transcription.legBubbles);
     auto* method = qobject_cast<QComboBox*>(form->editor("Solver method"));
     QVERIFY(method);
+    QCOMPARE(method->count(), static_cast<int>(std::size(SolverSpec::kMethods)));  // one entry per method
     method->setCurrentIndex(1);
     QCOMPARE(doc.scene().solver.method, std::string("ipopt"));
     QCOMPARE(doc.undoStack()->count(), commands + 8);

@@ -54,8 +54,9 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
   // them on by itself after a stall.
   f.addBool(tr("Leg bubbles"), [](const Scene& s) { return s.transcription.legBubbles; },
             [](Scene& s, bool v) { s.transcription.legBubbles = v; });
-  // SolverSpec::kMethods in order: "al", "ipopt", "sqp".
-  f.addChoice(tr("Solver method"), {tr("augmented Lagrangian"), tr("interior point (IPOPT)"), tr("SQP")},
+  // SolverSpec::kMethods in order: "al", "ipopt", "sqp", "witkin-kass".
+  f.addChoice(tr("Solver method"), {tr("augmented Lagrangian"), tr("interior point (IPOPT)"), tr("SQP"),
+                                        tr("Witkin-Kass (every iterate restored)")},
               [](const Scene& s) {
                 const auto* m = std::find(std::begin(SolverSpec::kMethods), std::end(SolverSpec::kMethods), s.solver.method);
                 return m == std::end(SolverSpec::kMethods) ? 0 : static_cast<int>(m - std::begin(SolverSpec::kMethods));

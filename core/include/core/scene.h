@@ -160,8 +160,9 @@ struct TranscriptionSpec {
 
 struct SolverSpec {
   // The method (solver/augmented_lagrangian.h, SolverMethod): "al", the augmented Lagrangian
-  // with Newton polish, "ipopt", the interior point through IPOPT, or "sqp", the SQP.
-  static constexpr const char* kMethods[] = {"al", "ipopt", "sqp"};
+  // with Newton polish, "ipopt", the interior point through IPOPT, "sqp", the SQP, or
+  // "witkin-kass", the projected Newton method whose every iterate is restored.
+  static constexpr const char* kMethods[] = {"al", "ipopt", "sqp", "witkin-kass"};
   std::string method = "al";
   int maxOuterIterations = 30;
   int maxInnerIterations = 60;

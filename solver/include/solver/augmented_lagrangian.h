@@ -21,8 +21,8 @@ namespace spacetime {
 
 // The method that solves the problem: the augmented Lagrangian with Newton polish (the
 // default), the interior-point method through IPOPT (interior_point.h) where it is built, or
-// the SQP (sqp.h).
-enum class SolverMethod { AugmentedLagrangian, InteriorPoint, Sqp };
+// the SQP (sqp.h), or the projected Newton method of Witkin and Kass (witkin_kass.h).
+enum class SolverMethod { AugmentedLagrangian, InteriorPoint, Sqp, WitkinKass };
 
 struct SolverOptions {
   SolverMethod method = SolverMethod::AugmentedLagrangian;
@@ -101,8 +101,8 @@ struct SolverOptions {
   bool interiorPointAfterStall = true;
   int interiorPointAfterStallIterations = 200;
   int interiorPointMaxIterations = 3000;  // IPOPT's max_iter (SolverMethod::InteriorPoint)
-  // SolverMethod::Sqp: its steps before it hands over to the augmented Lagrangian (the jump
-  // converges in 15-35; a long one that needs more is not converging).
+  // SolverMethod::Sqp and WitkinKass: their steps before they hand over to the augmented
+  // Lagrangian (the jump converges in 15-35; a long one that needs more is not converging).
   int sqpMaxSteps = 60;
 
   std::string validate() const;  // empty if valid, else what is wrong
@@ -156,10 +156,12 @@ struct SolverSummary {
   // steps and active-set changes) and the KKT systems it solved (the steps' cost).
   int newtonSteps = 0;
   int newtonSolves = 0;
-  int sqpSteps = 0;             // SolverMethod::Sqp: its steps (quadratic programs)
-  double sqpSeconds = 0;        // the SQP's time, its polish included
+  int sqpSteps = 0;             // SolverMethod::Sqp, WitkinKass: their steps (quadratic programs)
+  double sqpSeconds = 0;        // the time of those steps, their polish and restorations included
   double qpSeconds = 0;         // of which in the quadratic programs
-  int restorationSteps = 0;     // of the restoration phase after a stall (solver/restoration.h)
+  // Of the restoration phase (solver/restoration.h): after a stall, and every iterate of
+  // SolverMethod::WitkinKass.
+  int restorationSteps = 0;
   double restorationSeconds = 0;
   bool polished = false;        // the result is the Newton polish's KKT point
   // The interior point after a stall (SolverOptions::interiorPointAfterStall): its IPOPT
@@ -204,7 +206,7 @@ std::vector<ViolatedConstraint> unmetConstraints(const SpacetimeProblem& problem
 std::string describeViolated(const std::vector<ViolatedConstraint>& violated);
 
 std::string toString(SolveStatus s);
-std::string toString(SolverMethod m);  // "al", "ipopt", "sqp": the names the CLI and scenes use
+std::string toString(SolverMethod m);  // "al", "ipopt", "sqp", "witkin-kass": the names the CLI and scenes use
 // The method with that name; false if there is none.
 bool parseSolverMethod(const std::string& name, SolverMethod* method);
 

@@ -1,0 +1,112 @@
+// What the two quadratic-program methods - `sqp` (sqp.cpp) and `witkin-kass` (witkin_kass.cpp) -
+// share around their programs: the rows split by kind, the programs' multipliers handed to the
+// augmented-Lagrangian state (where the Newton polish and any later warm start read them), the
+// polish itself, and the accounting of a phase's time in the summary of the method that
+// finishes the solve.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <vector>
+
+#include "raw_rows.h"
+#include "solver/augmented_lagrangian.h"
+#include "solver/newton_polish.h"
+
+namespace spacetime::raw {
+
+// An inequality this close to its bound is active for the polish.
+constexpr double kAtBound = 1e-6;
+
+// The evaluator's rows by kind, each in Ceres's order.
+struct RowKinds {
+  std::vector<int> objective, equality, inequality;
+  explicit RowKinds(const RawEvaluator& evaluator) {
+    for (int r = 0; r < evaluator.rows(); ++r)
+      (evaluator.kind(r) == RowKind::Objective ? objective : evaluator.kind(r) == RowKind::Equality ? equality : inequality)
+          .push_back(r);
+  }
+};
+
+// The triplets of M, shifted by (rowOffset, colOffset).
+inline void appendTriplets(const SpRow& M, int rowOffset, int colOffset, Triplets* t) {
+  for (int row = 0; row < M.outerSize(); ++row)
+    for (SpRow::InnerIterator e(M, row); e; ++e)
+      t->emplace_back(rowOffset + row, colOffset + static_cast<int>(e.col()), e.value());
+}
+
+// Appends the lower triangle of J_r^T J_r, the objective's Gauss-Newton Hessian.
+inline void appendGaussNewton(const SpRow& Jr, Triplets* t) {
+  const SpMat G = SpMat(Jr.transpose()) * Jr;
+  for (int k = 0; k < G.outerSize(); ++k)
+    for (SpMat::InnerIterator e(G, k); e; ++e)
+      if (e.row() >= e.col()) t->emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+}
+
+// The inequalities a step's program left out that its step crosses (linearised values
+// `linear`, one per inequality) join `held` (indices into the inequalities, kept sorted);
+// true if any did.
+inline bool holdCrossedRows(const Vec& linear, std::vector<int>* held) {
+  std::vector<char> isHeld(static_cast<size_t>(linear.size()), 0);
+  for (int i : *held) isHeld[static_cast<size_t>(i)] = 1;
+  const size_t before = held->size();
+  for (Eigen::Index i = 0; i < linear.size(); ++i)
+    if (!isHeld[static_cast<size_t>(i)] && linear[i] > 1e-9) held->push_back(static_cast<int>(i));
+  std::sort(held->begin(), held->end());
+  return held->size() != before;
+}
+
+// Hands the multipliers y (one per row: equalities free, inequalities >= 0) to the
+// augmented-Lagrangian state as lambda + rho c, so rho = 0 makes them the estimates themselves.
+// The polish holds at zero each inequality with a positive multiplier. An interior point leaves
+// every row one of about mu/slack (the jump's first polish, holding them all, stepped to a
+// violation of 3.7), so only the rows at their bound are handed over as active - with a tiny
+// multiplier where theirs is zero (weakly active rows): dropping those left the polish's reduced
+// Hessian indefinite at the jump's optimum, and every Newton step failed.
+inline void handOverMultipliers(const RawEvaluator& evaluator, const Vec& y, const Vec& values, double rho,
+                                AugmentedLagrangianState* state) {
+  const double floor = 1e-8 * std::max(1.0, y.lpNorm<Eigen::Infinity>());
+  for (int r = 0; r < evaluator.rows(); ++r) {
+    if (evaluator.kind(r) == RowKind::Objective) continue;
+    if (evaluator.kind(r) == RowKind::Equality) state->lambda[evaluator.multiplier(r)] = y[r];
+    else state->lambda[evaluator.multiplier(r)] = values[r] > -kAtBound ? std::max(y[r], floor) : 0.0;
+  }
+  state->rho = rho;
+}
+
+// The Newton polish from the multipliers in the state, its time added to the summary; on
+// failure it restores its start.
+inline PolishResult polishInto(SpacetimeProblem& problem, const SolverOptions& options, int threads,
+                               Clock::time_point deadline, const std::atomic<bool>* cancel, SolverSummary* summary) {
+  PolishOptions po;
+  po.tolerance = options.tolerance;
+  po.maxIterations = options.maxPolishIterations;
+  po.threads = threads;
+  po.deadline = deadline;
+  const PolishResult polished = polishNewton(problem, po, cancel);
+  addPolishTo(polished, summary);
+  return polished;
+}
+
+// A method's own phase followed by the augmented Lagrangian: the phase's steps and times join
+// the summary of the solve that finished.
+inline void addPhaseTo(const SolverSummary& phase, SolverSummary* total) {
+  total->iterations += phase.iterations;
+  total->outerIterations += phase.outerIterations;
+  total->linearSolverSeconds += phase.linearSolverSeconds;
+  total->sqpSteps += phase.sqpSteps;
+  total->sqpSeconds += phase.sqpSeconds;
+  total->qpSeconds += phase.qpSeconds;
+  total->restorationSteps += phase.restorationSteps;
+  total->restorationSeconds += phase.restorationSeconds;
+  total->newtonSteps += phase.newtonSteps;
+  total->newtonSolves += phase.newtonSolves;
+  total->jacobianSeconds += phase.jacobianSeconds;
+  total->polishSeconds += phase.polishSeconds;
+  total->polishEvaluationSeconds += phase.polishEvaluationSeconds;
+  total->hessianSeconds += phase.hessianSeconds;
+  total->factorisationSeconds += phase.factorisationSeconds;
+  total->lineSearchSeconds += phase.lineSearchSeconds;
+}
+
+}  // namespace spacetime::raw

@@ -1,0 +1,300 @@
+// The `witkin-kass` method (see witkin_kass.h): restored iterates, projected Newton steps on the
+// objective, the Newton polish to finish, the augmented Lagrangian where the steps fail.
+#include "solver/witkin_kass.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "program_steps.h"
+#include "solver/quadratic_program.h"
+#include "solver/restoration.h"
+
+namespace spacetime {
+namespace {
+
+using raw::Clock;
+using raw::RawEvaluator;
+using raw::RawRows;
+using raw::secondsSince;
+using raw::SpRow;
+using raw::Triplets;
+using raw::Variables;
+using raw::Vec;
+
+// A motion is restored when its largest row is within this: the restoration programs' own
+// accuracy (restoration.h; asked for 1e-8 they stop near 1e-7). The polish finishes to the
+// solve's tolerance.
+constexpr double kRestored = 1e-6;
+// Restoration steps from the starting motion (the default guess: far from the constraints), and
+// from a trial point (its linearised rows met: the violation is second order in the step).
+constexpr int kFirstRestorationSteps = 25, kTrialRestorationSteps = 8;
+// Multiplier updates of the augmented Lagrangian that bring a guess the restoration cannot
+// restore near the constraints (the heavy lamp: to 2.8e-3 after 4, from where it restores in
+// one step; after 2, at 0.054, the restoration crawled).
+constexpr int kApproachUpdates = 4;
+// Inequalities within this of their bound (or with a multiplier) join a step's program; rows a
+// step crosses join it and it is solved again (as in sqp.cpp).
+constexpr double kMargin = 0.05;
+constexpr int kMaxRounds = 10;
+constexpr int kMaxHalvings = 12;
+constexpr double kArmijo = 1e-4;
+// Witkin and Kass's Newton step uses the objective's Hessian; here its Gauss-Newton part J_r^T
+// J_r (the effort is a sum of squares), plus this multiple of the identity for directions the
+// objective does not see. The exact Hessian of the Lagrangian measured worse on the jump: its
+// programs needed inertia shifts of 0.7-11 far from the optimum and 0.01-0.1 near it, and the
+// steps crept (60 steps from 264 to 40, against 12 to 28.2 with Gauss-Newton; docs/design.md).
+constexpr double kObjectiveCurvatureFloor = 1e-6;
+// Stationarity (relative, as sqp.cpp) at which the steps stop.
+constexpr double kStationary = 1e-6;
+// Gauss-Newton steps converge linearly: once the objective falls by less than this fraction
+// over kStallWindow steps, the augmented Lagrangian's Newton polish and multiplier updates
+// finish (the jump: 28.1003 after 40 steps, -4e-6 per step; finished at 28.0987).
+constexpr double kStallFraction = 1e-4;
+constexpr int kStallWindow = 5;
+
+double largestRow(const Vec& values, const raw::RowKinds& kinds) {
+  double v = 0;
+  for (int r : kinds.equality) v = std::max(v, std::abs(values[r]));
+  for (int r : kinds.inequality) v = std::max(v, values[r]);
+  return v;
+}
+
+}  // namespace
+
+SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& options, const ProgressCallback& callback,
+                              const std::atomic<bool>* cancel) {
+  const Clock::time_point start = Clock::now();
+  SolverOptions al = options;
+  al.method = SolverMethod::AugmentedLagrangian;
+  auto viaAugmentedLagrangian = [&] {
+    SolverSummary s = solveSpacetime(problem, al, callback, cancel);
+    s.method = SolverMethod::WitkinKass;
+    return s;
+  };
+  if (!options.validate().empty() || !problem.freeEnds().empty()) return viaAugmentedLagrangian();
+  const int threads = std::max(1, options.threads);
+  Restoration restoration(problem, threads);
+  if (!restoration.ready()) return viaAugmentedLagrangian();
+  const Clock::time_point deadline = options.deadlineFrom(start);
+  const SolutionState initial = problem.state();
+  const Variables vars(problem.ceresProblem());
+  RawEvaluator evaluator(problem, vars, threads);
+  const raw::RowKinds kinds(evaluator);
+  const std::vector<int>&objective = kinds.objective, &equality = kinds.equality, &inequality = kinds.inequality;
+  const int n = vars.tangent, rowCount = evaluator.rows(), me = static_cast<int>(equality.size());
+
+  SolverSummary summary;
+  summary.method = SolverMethod::WitkinKass;
+  AugmentedLagrangianState& state = problem.augmentedLagrangian();
+  // Multipliers per row (equalities free, inequalities >= 0), for the augmented Lagrangian that
+  // finishes: a warm start's, then the programs'.
+  Vec y = Vec::Zero(rowCount);
+  if (options.warmStart && state.rho > 0)
+    for (int r = 0; r < rowCount; ++r)
+      if (evaluator.kind(r) != RowKind::Objective) y[r] = state.lambda[evaluator.multiplier(r)];
+  auto addIterationsTo = [](const SolverSummary& from, SolverSummary* to) {
+    to->iterations += from.iterations;
+    to->outerIterations += from.outerIterations;
+    to->jacobianSeconds += from.jacobianSeconds;
+    to->linearSolverSeconds += from.linearSolverSeconds;
+  };
+  auto restore = [&](int maxSteps) {
+    const Clock::time_point t0 = Clock::now();
+    const RestorationResult r = restoration.minimiseViolation(kRestored, maxSteps, deadline);
+    summary.restorationSteps += r.steps;
+    summary.restorationSeconds += secondsSince(t0);
+    return r;
+  };
+
+  std::string why, approached;
+  RestorationResult first = restore(kFirstRestorationSteps);
+  if (first.violation > kRestored && !(cancel && cancel->load())) {
+    // Gauss-Newton on the violation alone crawls from a guess far from the constraints (the
+    // heavy lamp: 0.29 after 47 steps): a few multiplier updates of the augmented Lagrangian,
+    // without its polish, bring the motion near them, and the restoration starts from there.
+    SolverOptions approach = al;
+    approach.maxOuterIterations = kApproachUpdates;
+    approach.newtonPolish = false;
+    approach.interiorPointAfterStall = false;
+    approach.spentSeconds += secondsSince(start);
+    const SolverSummary a = solveSpacetime(problem, approach, callback, cancel);
+    addIterationsTo(a, &summary);
+    std::ostringstream s;
+    s << "the restoration from the starting motion stopped at a largest row of " << first.violation << "; "
+      << a.outerIterations << " multiplier updates of the augmented Lagrangian brought it to " << a.maxViolation;
+    approached = s.str();
+    if (a.status == SolveStatus::Cancelled) why = "cancelled";
+    else first = restore(kFirstRestorationSteps);
+  }
+  const bool restored = why.empty() && first.violation <= kRestored;
+  if (why.empty() && !restored) {
+    std::ostringstream s;
+    s << (approached.empty() ? "the restoration from the starting motion" : approached + ", and the restoration from there")
+      << " stopped at a largest row of " << first.violation;
+    why = s.str();
+  }
+  QpWorkspace workspace;
+  double lastReport = -1;
+  std::vector<double> objectives;  // of the restored iterates
+  RawRows rows;
+  for (int step = 0; why.empty(); ++step) {
+    Clock::time_point phase = Clock::now();
+    if (!evaluator.evaluate(&rows, true)) {
+      why = "the rows of a restored motion are not finite";
+      break;
+    }
+    summary.jacobianSeconds += secondsSince(phase);
+    const SpRow Jr = raw::selectRows(rows.jacobian, objective), A = raw::selectRows(rows.jacobian, equality);
+    const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, equality);
+    const Vec g = raw::selectValues(rows.values, inequality);
+    const Vec grad = Jr.transpose() * r;
+    const double f = 0.5 * r.squaredNorm();
+    const double kkt = (grad + rows.jacobian.transpose() * y).lpNorm<Eigen::Infinity>() /
+                       std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+    objectives.push_back(f);
+    summary.sqpSteps = step;
+    if (callback && secondsSince(start) - lastReport >= 0.1) {
+      lastReport = secondsSince(start);
+      IterationReport report;
+      report.iterations = step;
+      report.objective = 2 * f;  // the problem's objective is |r|^2
+      report.maxViolation = largestRow(rows.values, kinds);
+      if (!callback(report)) {
+        why = "cancelled";
+        break;
+      }
+    }
+    if (kkt <= kStationary) {
+      why = "a KKT point";
+      break;
+    }
+    if (step >= kStallWindow && objectives[step - kStallWindow] - f < kStallFraction * f) {
+      why = "converging linearly";
+      break;
+    }
+    if (step >= options.sqpMaxSteps) {
+      why = "the step budget spent";
+      break;
+    }
+    if (cancel && cancel->load()) {
+      why = "cancelled";
+      break;
+    }
+    if (Clock::now() > deadline) {
+      why = "out of time";
+      break;
+    }
+
+    // The projected Newton step: the program on the equalities and the held inequalities.
+    phase = Clock::now();
+    Triplets ht;
+    for (int i = 0; i < n; ++i) ht.emplace_back(i, i, kObjectiveCurvatureFloor);
+    raw::appendGaussNewton(Jr, &ht);
+    summary.hessianSeconds += secondsSince(phase);
+    phase = Clock::now();
+    std::vector<int> held;  // indices into `inequality`
+    for (size_t i = 0; i < inequality.size(); ++i)
+      if (g[static_cast<Eigen::Index>(i)] > -kMargin || y[inequality[i]] > 0) held.push_back(static_cast<int>(i));
+    const SpRow Cfull = raw::selectRows(rows.jacobian, inequality);
+    QuadraticProgram program;
+    program.hessian.resize(n, n);
+    program.hessian.setFromTriplets(ht.begin(), ht.end());
+    program.gradient = grad;
+    program.equalities = A;
+    program.equalityTargets = -c;
+    QpOptions programOptions;
+    programOptions.maxIterations = 100;
+    programOptions.convex = true;
+    QpResult qp;
+    std::vector<int> heldRows;
+    bool solved = false;
+    for (int round = 0; round < kMaxRounds && !solved; ++round) {
+      heldRows.clear();
+      for (int i : held) heldRows.push_back(inequality[i]);
+      program.inequalities = raw::selectRows(rows.jacobian, heldRows);
+      program.inequalityBounds = -raw::selectValues(rows.values, heldRows);
+      qp = solveQuadraticProgram(program, programOptions, &workspace);
+      if (!qp.converged) break;
+      // Rows outside the program the step crosses join it, and it is solved again.
+      solved = !raw::holdCrossedRows(g + Cfull * qp.x, &held);
+    }
+    summary.qpSeconds += secondsSince(phase);
+    if (!solved) {
+      why = qp.converged ? "a step's quadratic program kept gaining rows" : "a step's quadratic program failed: " + qp.reason;
+      break;
+    }
+    const Vec d = qp.x;
+    Vec yNew = Vec::Zero(rowCount);
+    for (int i = 0; i < me; ++i) yNew[equality[i]] = qp.y[i];
+    for (size_t i = 0; i < heldRows.size(); ++i) yNew[heldRows[i]] = qp.z[static_cast<Eigen::Index>(i)];
+
+    // Armijo's rule on the objective over restored points. The program's minimum lies below its
+    // value at the (nearly zero) correction of the rows, so grad.d < 0 up to that correction.
+    phase = Clock::now();
+    const double slope = grad.dot(d);
+    if (slope >= -1e-14 * std::max(1.0, f)) {
+      why = "a KKT point";
+      break;
+    }
+    const std::vector<double> x0 = vars.save();
+    bool accepted = false;
+    double alpha = 1;
+    for (int halving = 0; halving < kMaxHalvings; ++halving) {
+      if (halving > 0) alpha *= 0.5;
+      vars.plus(x0, alpha * d);
+      if (restore(kTrialRestorationSteps).violation > kRestored) continue;
+      RawRows trial;
+      if (!evaluator.evaluate(&trial, false)) continue;
+      if (0.5 * raw::selectValues(trial.values, objective).squaredNorm() <= f + kArmijo * alpha * slope) {
+        accepted = true;
+        break;
+      }
+    }
+    summary.lineSearchSeconds += secondsSince(phase);
+    if (!accepted) {
+      vars.load(x0);
+      why = "no restored step lowered the objective";
+      break;
+    }
+    y += alpha * (yNew - y);
+  }
+  summary.sqpSeconds = secondsSince(start);
+
+  if (why == "cancelled") {
+    const ProblemMeasures m = measure(problem);
+    summary.status = SolveStatus::Cancelled;
+    summary.reason = "cancelled by the user; the last restored motion is kept";
+    summary.objective = m.objective;
+    summary.maxViolation = m.maxViolation;
+    summary.worstConstraint = m.worstConstraint;
+    summary.solveSeconds = secondsSince(start);
+    return summary;
+  }
+  // The augmented Lagrangian finishes: warm from the last restored motion with the programs'
+  // multipliers (its warm start begins with the Newton polish), or cold from the starting motion
+  // when no motion was restored. Not on from its approach's multiplier updates, made without
+  // the polish: the biped continued from there stalled at 1.1e-4 where `al` converges in 33 s.
+  std::ostringstream reason;
+  if (restored && !approached.empty()) reason << approached << "; ";
+  reason << summary.sqpSteps << " projected Newton steps (" << why << ")";
+  RawRows here;
+  if (restored && evaluator.evaluate(&here, false)) {
+    reason << " to an objective of " << 2 * 0.5 * raw::selectValues(here.values, objective).squaredNorm()
+           << ", then the augmented Lagrangian from that motion: ";
+    raw::handOverMultipliers(evaluator, y, here.values, std::min(options.maxPenalty, options.warmRestartPenalty), &state);
+    al.warmStart = true;
+  } else {
+    problem.restore(initial);
+    reason << ", then the augmented Lagrangian from the starting motion: ";
+  }
+  al.spentSeconds += secondsSince(start);
+  SolverSummary finished = solveSpacetime(problem, al, callback, cancel);
+  finished.method = SolverMethod::WitkinKass;
+  raw::addPhaseTo(summary, &finished);
+  finished.reason = reason.str() + finished.reason;
+  finished.solveSeconds = secondsSince(start);
+  return finished;
+}
+
+}  // namespace spacetime
