@@ -77,13 +77,16 @@ struct Restoration::State {
   std::string error;
   std::vector<int> equality, inequality;
   QpWorkspace hard, elastic;  // the two programs' patterns, analysed once
+  std::vector<int> objective;
+  double effortMetric = 0;
 
-  State(SpacetimeProblem& p, int threads)
-      : problem(p), vars(p.ceresProblem()), evaluator(p, vars, std::max(1, threads)) {
+  State(SpacetimeProblem& p, int threads, double metric)
+      : problem(p), vars(p.ceresProblem()), evaluator(p, vars, std::max(1, threads)), effortMetric(metric) {
     if (!p.freeEnds().empty() || evaluator.anyMoving()) error = "free contact ends are bounded variables";
     for (int r = 0; r < evaluator.rows(); ++r) {
       if (evaluator.kind(r) == RowKind::Equality) equality.push_back(r);
       if (evaluator.kind(r) == RowKind::Inequality) inequality.push_back(r);
+      if (evaluator.kind(r) == RowKind::Objective) objective.push_back(r);
     }
   }
   // The largest row violation, and the merit 1/2 sum of the rows' squared violations.
@@ -99,7 +102,8 @@ struct Restoration::State {
   }
 };
 
-Restoration::Restoration(SpacetimeProblem& problem, int threads) : state_(std::make_unique<State>(problem, threads)) {}
+Restoration::Restoration(SpacetimeProblem& problem, int threads, double effortMetric)
+    : state_(std::make_unique<State>(problem, threads, effortMetric)) {}
 Restoration::~Restoration() = default;
 bool Restoration::ready() const { return state_->error.empty(); }
 const std::string& Restoration::error() const { return state_->error; }
@@ -123,10 +127,15 @@ RestorationStep Restoration::step(double damping) {
   const SpRow Jc = raw::selectRows(rows.jacobian, st.equality);
   const SpRow Jg = raw::selectRows(rows.jacobian, st.inequality);
   const Vec c = raw::selectValues(rows.values, st.equality), g = raw::selectValues(rows.values, st.inequality);
-  // The model: 1/2 dx^T M dx + b.dx is 1/2 |c + J_c dx|^2 + damping/2 |dx|^2 less a constant.
-  SpMat identity(n, n);
-  identity.setIdentity();
-  const SpMat M = SpMat(Jc.transpose()) * Jc + damping * identity;
+  // The model: 1/2 dx^T M dx + b.dx is 1/2 |c + J_c dx|^2 + damping/2 |dx|_W^2 less a constant,
+  // W = I + effortMetric J_r^T J_r.
+  SpMat metric(n, n);
+  metric.setIdentity();
+  if (st.effortMetric > 0) {
+    const SpRow Jr = raw::selectRows(rows.jacobian, st.objective);
+    metric += st.effortMetric * SpMat(SpMat(Jr.transpose()) * Jr);
+  }
+  const SpMat M = SpMat(Jc.transpose()) * Jc + damping * metric;
   const Vec b = Jc.transpose() * c;
   // Tight: near a feasible point the step is of the size of the violation, and an inexact
   // interior point leaves rows whose multipliers are nearly zero off by mu / z.

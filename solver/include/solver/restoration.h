@@ -53,7 +53,12 @@ struct RestorationResult {
 class Restoration {
  public:
   // Free contact ends are refused (ready() false): their instants are bounded variables.
-  explicit Restoration(SpacetimeProblem& problem, int threads = 1);
+  // effortMetric > 0 measures the damping term in the metric I + effortMetric J_r^T J_r (the
+  // objective's Gauss-Newton Hessian) instead of I: among the corrections that meet the rows the
+  // steps then prefer those that change the effort least, which Witkin and Kass's restoration
+  // takes (witkin_kass.h). In the identity metric a 2 cm edit of the jump's end pose crawled
+  // (25 steps from 0.02 to 5.7e-4); with effortMetric 100 it restored in 4 steps.
+  explicit Restoration(SpacetimeProblem& problem, int threads = 1, double effortMetric = 0);
   ~Restoration();
   bool ready() const;
   const std::string& error() const;
