@@ -1,5 +1,5 @@
 // The `witkin-kass` method (see witkin_kass.h): restored iterates, projected Newton steps on the
-// objective, the Newton polish to finish, the augmented Lagrangian where the steps fail.
+// objective, the augmented Lagrangian to finish.
 #include "solver/witkin_kass.h"
 
 #include <algorithm>
@@ -24,7 +24,7 @@ using raw::Vec;
 
 // The restoration's metric (restoration.h): I + kEffortMetric J_r^T J_r. Measured against the
 // identity metric from the default guesses: the biped restores (25 steps to 1879.454 in 20 s,
-// against 34-45 s through the augmented Lagrangian) and so does the heavy lamp (21 steps to the
+// against 33 s through the augmented Lagrangian) and so does the heavy lamp (21 steps to the
 // sqp's 110.292856); the jump and the hurdle, which restored in the identity metric, go through
 // the approach instead (the jump to the same 28.0987, the hurdle to the augmented Lagrangian's
 // lower 28.5685 instead of the sqp's 33.3150).
@@ -37,8 +37,8 @@ constexpr double kRestored = 1e-6;
 // from a trial point (its linearised rows met: the violation is second order in the step).
 constexpr int kFirstRestorationSteps = 25, kTrialRestorationSteps = 8;
 // Multiplier updates of the augmented Lagrangian that bring a guess the restoration cannot
-// restore near the constraints (the heavy lamp: to 2.8e-3 after 4, from where it restores in
-// one step; after 2, at 0.054, the restoration crawled).
+// restore near the constraints (measured in the identity metric: the heavy lamp to 2.8e-3 after
+// 4, from where it restored in one step; after 2, at 0.054, the restoration crawled).
 constexpr int kApproachUpdates = 4;
 // Inequalities within this of their bound (or with a multiplier) join a step's program; rows a
 // step crosses join it and it is solved again (as in sqp.cpp).
@@ -117,8 +117,8 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
   std::string why, approached;
   RestorationResult first = restore(kFirstRestorationSteps);
   if (first.violation > kRestored && !(cancel && cancel->load())) {
-    // Gauss-Newton on the violation alone crawls from a guess far from the constraints (the
-    // heavy lamp: 0.29 after 47 steps): a few multiplier updates of the augmented Lagrangian,
+    // Gauss-Newton on the violation alone crawls from some guesses far from the constraints
+    // (the jump: 0.053 after 25 steps): a few multiplier updates of the augmented Lagrangian,
     // without its polish, bring the motion near them, and the restoration starts from there.
     SolverOptions approach = al;
     approach.maxOuterIterations = kApproachUpdates;
