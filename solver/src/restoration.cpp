@@ -205,7 +205,8 @@ RestorationStep Restoration::step(double damping) {
   return finish("");
 }
 
-RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps, Clock::time_point deadline) {
+RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps, Clock::time_point deadline,
+                                                const std::atomic<bool>* cancel) {
   State& st = *state_;
   const Clock::time_point start = Clock::now();
   RestorationResult out;
@@ -229,6 +230,10 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
   while (out.violation > tolerance) {
     if (out.steps >= maxSteps || Clock::now() > deadline) {
       out.reason = "out of steps or time";
+      break;
+    }
+    if (cancel && cancel->load()) {
+      out.reason = "cancelled";
       break;
     }
     const std::vector<double> before = st.vars.save();

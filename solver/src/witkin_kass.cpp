@@ -108,7 +108,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
   };
   auto restore = [&](int maxSteps) {
     const Clock::time_point t0 = Clock::now();
-    const RestorationResult r = restoration.minimiseViolation(kRestored, maxSteps, deadline);
+    const RestorationResult r = restoration.minimiseViolation(kRestored, maxSteps, deadline, cancel);
     summary.restorationSteps += r.steps;
     summary.restorationSeconds += secondsSince(t0);
     return r;
@@ -134,6 +134,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     if (a.status == SolveStatus::Cancelled) why = "cancelled";
     else first = restore(kFirstRestorationSteps);
   }
+  if (cancel && cancel->load()) why = "cancelled";
   const bool restored = why.empty() && first.violation <= kRestored;
   if (why.empty() && !restored) {
     std::ostringstream s;
@@ -247,7 +248,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     const std::vector<double> x0 = vars.save();
     bool accepted = false;
     double alpha = 1;
-    for (int halving = 0; halving < kMaxHalvings; ++halving) {
+    for (int halving = 0; halving < kMaxHalvings && !(cancel && cancel->load()); ++halving) {
       if (halving > 0) alpha *= 0.5;
       vars.plus(x0, alpha * d);
       if (restore(kTrialRestorationSteps).violation > kRestored) continue;
@@ -261,7 +262,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     summary.lineSearchSeconds += secondsSince(phase);
     if (!accepted) {
       vars.load(x0);
-      why = "no restored step lowered the objective";
+      why = cancel && cancel->load() ? "cancelled" : "no restored step lowered the objective";
       break;
     }
     y += alpha * (yNew - y);
@@ -271,7 +272,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
   if (why == "cancelled") {
     const ProblemMeasures m = measure(problem);
     summary.status = SolveStatus::Cancelled;
-    summary.reason = "cancelled by the user; the last restored motion is kept";
+    summary.reason = restored ? "cancelled by the user; the last restored motion is kept" : "cancelled by the user";
     summary.objective = m.objective;
     summary.maxViolation = m.maxViolation;
     summary.worstConstraint = m.worstConstraint;

@@ -74,6 +74,19 @@ TEST(WitkinKass, LuxoJumpIteratesMeetTheConstraintsAndEndAtTheSqpOptimum) {
   EXPECT_NEAR(s.objective, sqp.objective, 1e-4 * sqp.objective);
 }
 
+// Stopped at its first projected step (the editor's Stop), the method keeps that restored motion:
+// within 1e-6 of every constraint, reported as cancelled.
+TEST(WitkinKass, AStopKeepsTheLastRestoredMotion) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  const SolverSummary s = solveSpacetime(*problem, witkinKass(), [](const IterationReport& r) { return r.rho > 0; });
+  EXPECT_EQ(s.status, SolveStatus::Cancelled) << s.reason;
+  EXPECT_NE(s.reason.find("the last restored motion is kept"), std::string::npos) << s.reason;
+  EXPECT_LE(measure(*problem).maxViolation, 1e-6);
+  EXPECT_LE(s.maxViolation, 1e-6);
+}
+
 // Two pins at one instant in two places: the restoration cannot meet both, the augmented
 // Lagrangian solves from the starting motion, stalls, says the constraints conflict and names
 // the two pins.

@@ -21,6 +21,7 @@
 // below 1e-6 from there (tests/solver/restoration_test.cpp).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <string>
@@ -67,9 +68,11 @@ class Restoration {
   RestorationStep step(double damping);
 
   // Damped steps until the violation is within `tolerance`, a positive minimum of the merit, or
-  // maxSteps / the deadline. The motion is the last accepted step's (lower merit than before).
+  // maxSteps / the deadline / `cancel` (checked between steps). The motion is the last accepted
+  // step's (lower merit than before).
   RestorationResult minimiseViolation(double tolerance, int maxSteps,
-                                      std::chrono::steady_clock::time_point deadline);
+                                      std::chrono::steady_clock::time_point deadline,
+                                      const std::atomic<bool>* cancel = nullptr);
 
  private:
   struct State;
