@@ -18,16 +18,6 @@ namespace spacetime::raw {
 // An inequality this close to its bound is active for the polish.
 constexpr double kAtBound = 1e-6;
 
-// The evaluator's rows by kind, each in Ceres's order.
-struct RowKinds {
-  std::vector<int> objective, equality, inequality;
-  explicit RowKinds(const RawEvaluator& evaluator) {
-    for (int r = 0; r < evaluator.rows(); ++r)
-      (evaluator.kind(r) == RowKind::Objective ? objective : evaluator.kind(r) == RowKind::Equality ? equality : inequality)
-          .push_back(r);
-  }
-};
-
 // The triplets of M, shifted by (rowOffset, colOffset).
 inline void appendTriplets(const SpRow& M, int rowOffset, int colOffset, Triplets* t) {
   for (int row = 0; row < M.outerSize(); ++row)
@@ -86,6 +76,19 @@ inline PolishResult polishInto(SpacetimeProblem& problem, const SolverOptions& o
   const PolishResult polished = polishNewton(problem, po, cancel);
   addPolishTo(polished, summary);
   return polished;
+}
+
+// A method's own ending: the status and the measures of the problem's current motion.
+inline SolverSummary finishedAs(SolveStatus status, const SpacetimeProblem& problem, Clock::time_point start,
+                                SolverSummary summary) {
+  const ProblemMeasures m = measure(problem);
+  summary.status = status;
+  summary.converged = status == SolveStatus::Converged;
+  summary.objective = m.objective;
+  summary.maxViolation = m.maxViolation;
+  summary.worstConstraint = m.worstConstraint;
+  summary.solveSeconds = secondsSince(start);
+  return summary;
 }
 
 // A method's own phase followed by the augmented Lagrangian: the phase's steps and times join

@@ -1,6 +1,7 @@
 // The problem's rows in raw form (before the augmented-Lagrangian transform) for the methods
-// that work on them directly: the Newton polish (newton_polish.cpp) and the interior-point
-// method (interior_point.cpp). Variables lists the parameter blocks that move and the tangent
+// that work on them directly: the Newton polish (newton_polish.cpp), the interior-point method
+// (interior_point.cpp), the restoration (restoration.cpp), the SQP (sqp.cpp) and the projected
+// Newton method (witkin_kass.cpp). Variables lists the parameter blocks that move and the tangent
 // column of each coordinate; RawEvaluator evaluates every row with its Jacobian in those
 // columns through Ceres, and the weighted curvature sum_r w_r grad^2 row_r of the kernels.
 #pragma once
@@ -230,6 +231,16 @@ class RawEvaluator {
   std::vector<std::vector<int>> columns_;  // each term's tangent column per stacked input (-1: constant)
   std::vector<RowKind> kind_;
   std::vector<int> multiplier_;
+};
+
+// The evaluator's rows by kind, each in Ceres's order.
+struct RowKinds {
+  std::vector<int> objective, equality, inequality;
+  explicit RowKinds(const RawEvaluator& evaluator) {
+    for (int r = 0; r < evaluator.rows(); ++r)
+      (evaluator.kind(r) == RowKind::Objective ? objective : evaluator.kind(r) == RowKind::Equality ? equality : inequality)
+          .push_back(r);
+  }
 };
 
 }  // namespace spacetime::raw

@@ -75,19 +75,14 @@ struct Restoration::State {
   Variables vars;
   RawEvaluator evaluator;
   std::string error;
-  std::vector<int> equality, inequality;
+  const raw::RowKinds kinds;
   QpWorkspace hard, elastic;  // the two programs' patterns, analysed once
-  std::vector<int> objective;
   double effortMetric = 0;
 
   State(SpacetimeProblem& p, int threads, double metric)
-      : problem(p), vars(p.ceresProblem()), evaluator(p, vars, std::max(1, threads)), effortMetric(metric) {
+      : problem(p), vars(p.ceresProblem()), evaluator(p, vars, std::max(1, threads)), kinds(evaluator),
+        effortMetric(metric) {
     if (!p.freeEnds().empty() || evaluator.anyMoving()) error = "free contact ends are bounded variables";
-    for (int r = 0; r < evaluator.rows(); ++r) {
-      if (evaluator.kind(r) == RowKind::Equality) equality.push_back(r);
-      if (evaluator.kind(r) == RowKind::Inequality) inequality.push_back(r);
-      if (evaluator.kind(r) == RowKind::Objective) objective.push_back(r);
-    }
   }
   // The largest row violation, and the merit 1/2 sum of the rows' squared violations.
   double violation(const Vec& values) const {
@@ -124,15 +119,15 @@ RestorationStep Restoration::step(double damping) {
   step.meritBefore = step.meritAfter = st.merit(rows.values);
 
   const int n = st.vars.tangent;
-  const SpRow Jc = raw::selectRows(rows.jacobian, st.equality);
-  const SpRow Jg = raw::selectRows(rows.jacobian, st.inequality);
-  const Vec c = raw::selectValues(rows.values, st.equality), g = raw::selectValues(rows.values, st.inequality);
+  const SpRow Jc = raw::selectRows(rows.jacobian, st.kinds.equality);
+  const SpRow Jg = raw::selectRows(rows.jacobian, st.kinds.inequality);
+  const Vec c = raw::selectValues(rows.values, st.kinds.equality), g = raw::selectValues(rows.values, st.kinds.inequality);
   // The model: 1/2 dx^T M dx + b.dx is 1/2 |c + J_c dx|^2 + damping/2 |dx|_W^2 less a constant,
   // W = I + effortMetric J_r^T J_r.
   SpMat metric(n, n);
   metric.setIdentity();
   if (st.effortMetric > 0) {
-    const SpRow Jr = raw::selectRows(rows.jacobian, st.objective);
+    const SpRow Jr = raw::selectRows(rows.jacobian, st.kinds.objective);
     metric += st.effortMetric * SpMat(SpMat(Jr.transpose()) * Jr);
   }
   const SpMat M = SpMat(Jc.transpose()) * Jc + damping * metric;
@@ -148,7 +143,7 @@ RestorationStep Restoration::step(double damping) {
   // the jump's 4332). That is exact, not an approximation: a convex program's minimum over fewer
   // rows is its minimum over all of them if it meets the others, which is checked, and any it
   // crosses join and the program is solved again.
-  std::vector<int> held;  // indices into st.inequality
+  std::vector<int> held;  // indices into st.kinds.inequality
   for (Eigen::Index i = 0; i < g.size(); ++i)
     if (g[i] > -kScreen) held.push_back(static_cast<int>(i));
   const bool violated = g.size() > 0 && g.maxCoeff() > 0;

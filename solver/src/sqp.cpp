@@ -330,16 +330,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   }
   summary.sqpSeconds = secondsSince(start);
 
-  auto finish = [&](SolveStatus status) {
-    const ProblemMeasures m = measure(problem);
-    summary.status = status;
-    summary.converged = status == SolveStatus::Converged;
-    summary.objective = m.objective;
-    summary.maxViolation = m.maxViolation;
-    summary.worstConstraint = m.worstConstraint;
-    summary.solveSeconds = secondsSince(start);
-    return summary;
-  };
+  auto finish = [&](SolveStatus status) { return raw::finishedAs(status, problem, start, summary); };
   if (done) {
     problem.syncFreeEnds();
     return finish(SolveStatus::Converged);

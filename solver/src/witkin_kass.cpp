@@ -100,12 +100,6 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
   // Multipliers per row (equalities free, inequalities >= 0): the programs', for the augmented
   // Lagrangian that finishes.
   Vec y = Vec::Zero(rowCount);
-  auto addIterationsTo = [](const SolverSummary& from, SolverSummary* to) {
-    to->iterations += from.iterations;
-    to->outerIterations += from.outerIterations;
-    to->jacobianSeconds += from.jacobianSeconds;
-    to->linearSolverSeconds += from.linearSolverSeconds;
-  };
   auto restore = [&](int maxSteps) {
     const Clock::time_point t0 = Clock::now();
     const RestorationResult r = restoration.minimiseViolation(kRestored, maxSteps, deadline, cancel);
@@ -126,7 +120,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     approach.interiorPointAfterStall = false;
     approach.spentSeconds += secondsSince(start);
     const SolverSummary a = solveSpacetime(problem, approach, callback, cancel);
-    addIterationsTo(a, &summary);
+    raw::addPhaseTo(a, &summary);
     std::ostringstream s;
     s << "the restoration from the starting motion stopped at a largest row of " << first.violation << "; "
       << a.outerIterations << " multiplier updates of the augmented Lagrangian brought it to " << a.maxViolation;
@@ -270,14 +264,8 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
   summary.sqpSeconds = secondsSince(start);
 
   if (why == "cancelled") {
-    const ProblemMeasures m = measure(problem);
-    summary.status = SolveStatus::Cancelled;
     summary.reason = restored ? "cancelled by the user; the last restored motion is kept" : "cancelled by the user";
-    summary.objective = m.objective;
-    summary.maxViolation = m.maxViolation;
-    summary.worstConstraint = m.worstConstraint;
-    summary.solveSeconds = secondsSince(start);
-    return summary;
+    return raw::finishedAs(SolveStatus::Cancelled, problem, start, summary);
   }
   // The augmented Lagrangian finishes: warm from the last restored motion with the programs'
   // multipliers (its warm start begins with the Newton polish), or cold from the starting motion
@@ -288,7 +276,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
   reason << summary.sqpSteps << " projected Newton steps (" << why << ")";
   RawRows here;
   if (restored && evaluator.evaluate(&here, false)) {
-    reason << " to an objective of " << 2 * 0.5 * raw::selectValues(here.values, objective).squaredNorm()
+    reason << " to an objective of " << raw::selectValues(here.values, objective).squaredNorm()
            << ", then the augmented Lagrangian from that motion: ";
     raw::handOverMultipliers(evaluator, y, here.values, std::min(options.maxPenalty, options.warmRestartPenalty), &state);
     al.warmStart = true;
