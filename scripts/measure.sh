@@ -7,7 +7,8 @@
 #
 #   scripts/measure.sh            everything
 #   scripts/measure.sh benchmarks the benchmarks only
-#   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 15 minutes)
+#   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 20 minutes)
+#   scripts/measure.sh characters the methods on the biped, the quadruped and the humanoid only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli > /dev/null
@@ -38,6 +39,19 @@ methods_tables() {
       method_row "tests/scenes/ladder/$name.json" "$name" "$method"
     done
   done
+  characters_table
+}
+characters_table() {
+  echo
+  echo "## The methods beyond the lamps (spacetime-cli solve --method M, 2 threads, single runs)"
+  echo
+  echo "| scene | method | exit | objective | SQP or projected steps (s in programs) | LM iterations + Newton passes | seconds |"
+  echo "|---|---|---|---|---|---|---|"
+  for name in biped_jump quadruped_hop humanoid_jump; do
+    for method in al sqp witkin-kass; do
+      method_row "resources/scenes/$name.json" "$name" "$method"
+    done
+  done
 }
 method_row() {
   set +e
@@ -53,6 +67,7 @@ print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {s['objective']:.6f} |
 PY
 }
 [ "${1:-}" = methods ] && { methods_tables; exit 0; }
+[ "${1:-}" = characters ] && { characters_table; exit 0; }
 
 echo "## Solves from the default guess (solve_benchmark, medians of 5)"
 echo

@@ -45,33 +45,63 @@ std::vector<int> patternOf(const QuadraticProgram& qp) {
 
 }  // namespace
 
-// K's lower triangle in a pattern fixed for a program's pattern (H, A, the pairs of columns
-// each inequality row touches, the diagonal), the slot in K's values of every entry the
-// program's matrices scatter into, and the LDL^T's symbolic analysis. Built once and reused
-// by every program of the same pattern (each step of a restoration or an SQP on one problem).
+// K in a pattern fixed for a family of programs, already permuted by a fill-reducing ordering
+// (so each factorisation reads K as stored instead of permuting a copy: a sixth of its time),
+// the slot in K's values of every entry the current program's matrices scatter into, and the
+// LDL^T's symbolic analysis. The SQP-type methods solve many programs on one problem whose
+// inequality rows come and go (the rows held near activity, the rows a step crosses); their
+// entries mostly fall inside a pattern already built, so a new program only looks up its slots,
+// and a program that needs new entries rebuilds the pattern with the old ones kept, so the
+// pattern grows to cover the family after a few rebuilds (the jump's sqp: 40 rebuilds of 75
+// programs before).
 struct QpWorkspace::Pattern {
-  std::vector<int> signature;  // patternOf the program it was built for
-  SpMat K;
+  std::vector<int> signature;  // patternOf the last program whose slots are assigned
+  int n = 0, me = 0;
+  Eigen::VectorXi position;  // position[i]: where K's row and column i sit in the permuted K
+  SpMat K;                   // the upper triangle of the permuted K, column-major
   std::vector<int> hessianSlots, equalitySlots, diagonal, dualDiagonal, pairSlots, rowPairs;
-  Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  Eigen::SimplicialLDLT<SpMat, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
 
-  Pattern(const QuadraticProgram& qp, std::vector<int> sig) : signature(std::move(sig)) {
-    const int n = static_cast<int>(qp.gradient.size()), me = static_cast<int>(qp.equalities.rows());
-    std::vector<Eigen::Triplet<double>> entries;
-    for (int k = 0; k < qp.hessian.outerSize(); ++k)
-      for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
-        if (e.row() >= e.col()) entries.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), 0.0);
-    for (int k = 0; k < qp.equalities.outerSize(); ++k)
-      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) entries.emplace_back(n + k, static_cast<int>(e.col()), 0.0);
-    const SpRow& C = qp.inequalities;
-    for (int i = 0; i < C.outerSize(); ++i)
-      for (SpRow::InnerIterator a(C, i); a; ++a)
-        for (SpRow::InnerIterator b(C, i); b && b.col() <= a.col(); ++b)
-          entries.emplace_back(static_cast<int>(a.col()), static_cast<int>(b.col()), 0.0);
-    for (int i = 0; i < n + me; ++i) entries.emplace_back(i, i, 0.0);
-    K.resize(n + me, n + me);
-    K.setFromTriplets(entries.begin(), entries.end());
+  // A pattern holding every entry `qp` scatters into and every entry of `previous`.
+  Pattern(const QuadraticProgram& qp, const Pattern* previous) {
+    n = static_cast<int>(qp.gradient.size());
+    me = static_cast<int>(qp.equalities.rows());
+    std::vector<Eigen::Triplet<double>> entries;  // lower triangle, unpermuted
+    forEachEntry(qp, [&](int row, int col) { entries.emplace_back(row, col, 1.0); });
+    if (previous)
+      for (int k = 0; k < previous->K.outerSize(); ++k)
+        for (SpMat::InnerIterator e(previous->K, k); e; ++e) {
+          const int a = previous->original[e.row()], b = previous->original[e.col()];
+          entries.emplace_back(std::max(a, b), std::min(a, b), 1.0);
+        }
+    const int size = n + me;
+    SpMat lower(size, size);
+    lower.setFromTriplets(entries.begin(), entries.end());
+    // The ordering of the full symmetric pattern (AMD, as SimplicialLDLT would choose).
+    const SpMat full = lower.selfadjointView<Eigen::Lower>();
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+    Eigen::AMDOrdering<int>()(full, inverse);
+    original = inverse.indices();  // original[p]: K's index at permuted position p
+    position.resize(size);
+    for (int p = 0; p < size; ++p) position[original[p]] = p;
+    std::vector<Eigen::Triplet<double>> permuted;
+    permuted.reserve(lower.nonZeros());
+    for (int k = 0; k < lower.outerSize(); ++k)
+      for (SpMat::InnerIterator e(lower, k); e; ++e) {
+        const int a = position[static_cast<int>(e.row())], b = position[static_cast<int>(e.col())];
+        permuted.emplace_back(std::min(a, b), std::max(a, b), 0.0);
+      }
+    K.resize(size, size);
+    K.setFromTriplets(permuted.begin(), permuted.end());
     K.makeCompressed();
+    ldlt.analyzePattern(K);
+  }
+
+  // Looks up the slot of every entry `qp` scatters into; false if one is not in the pattern.
+  bool assignSlots(const QuadraticProgram& qp) {
+    if (static_cast<int>(qp.gradient.size()) != n || static_cast<int>(qp.equalities.rows()) != me) return false;
+    hessianSlots.clear(), equalitySlots.clear(), diagonal.clear(), dualDiagonal.clear();
+    pairSlots.clear(), rowPairs.clear();
     for (int k = 0; k < qp.hessian.outerSize(); ++k)
       for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
         if (e.row() >= e.col()) hessianSlots.push_back(slot(static_cast<int>(e.row()), static_cast<int>(e.col())));
@@ -79,6 +109,7 @@ struct QpWorkspace::Pattern {
       for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) equalitySlots.push_back(slot(n + k, static_cast<int>(e.col())));
     for (int i = 0; i < n; ++i) diagonal.push_back(slot(i, i));
     for (int i = 0; i < me; ++i) dualDiagonal.push_back(slot(n + i, n + i));
+    const SpRow& C = qp.inequalities;
     rowPairs.reserve(C.rows() + 1);
     rowPairs.push_back(0);
     for (int i = 0; i < C.outerSize(); ++i) {
@@ -87,13 +118,52 @@ struct QpWorkspace::Pattern {
           pairSlots.push_back(slot(static_cast<int>(a.col()), static_cast<int>(b.col())));
       rowPairs.push_back(static_cast<int>(pairSlots.size()));
     }
-    ldlt.analyzePattern(K);
+    for (const auto* slots : {&hessianSlots, &equalitySlots, &diagonal, &dualDiagonal, &pairSlots})
+      if (std::find(slots->begin(), slots->end(), -1) != slots->end()) return false;
+    return true;
   }
-  // Index into K's values of the entry (row, col), row >= col.
+
+  // Permutes a vector of K's rows into the factorisation's order and back.
+  Vec permute(const Vec& v) const {
+    Vec out(v.size());
+    for (Eigen::Index i = 0; i < v.size(); ++i) out[position[i]] = v[i];
+    return out;
+  }
+  Vec unpermute(const Vec& v) const {
+    Vec out(v.size());
+    for (Eigen::Index i = 0; i < v.size(); ++i) out[i] = v[position[i]];
+    return out;
+  }
+
+ private:
+  Eigen::VectorXi original;
+
+  // Every entry of K's lower triangle (unpermuted) the program scatters into: H's lower
+  // triangle, A below H, the pairs of columns each inequality row touches, the diagonal.
+  template <typename Visit>
+  void forEachEntry(const QuadraticProgram& qp, Visit visit) const {
+    for (int k = 0; k < qp.hessian.outerSize(); ++k)
+      for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
+        if (e.row() >= e.col()) visit(static_cast<int>(e.row()), static_cast<int>(e.col()));
+    for (int k = 0; k < qp.equalities.outerSize(); ++k)
+      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) visit(n + k, static_cast<int>(e.col()));
+    const SpRow& C = qp.inequalities;
+    for (int i = 0; i < C.outerSize(); ++i)
+      for (SpRow::InnerIterator a(C, i); a; ++a)
+        for (SpRow::InnerIterator b(C, i); b && b.col() <= a.col(); ++b)
+          visit(static_cast<int>(a.col()), static_cast<int>(b.col()));
+    for (int i = 0; i < n + me; ++i) visit(i, i);
+  }
+
+  // Index into K's values of the entry (row, col) of the unpermuted K, or -1 if it is not in
+  // the pattern.
   int slot(int row, int col) const {
-    const int* begin = K.innerIndexPtr() + K.outerIndexPtr()[col];
-    const int* end = K.innerIndexPtr() + K.outerIndexPtr()[col + 1];
-    return static_cast<int>(std::lower_bound(begin, end, row) - K.innerIndexPtr());
+    int a = position[row], b = position[col];
+    if (a > b) std::swap(a, b);  // the upper triangle: column b, row a
+    const int* begin = K.innerIndexPtr() + K.outerIndexPtr()[b];
+    const int* end = K.innerIndexPtr() + K.outerIndexPtr()[b + 1];
+    const int* at = std::lower_bound(begin, end, a);
+    return at != end && *at == a ? static_cast<int>(at - K.innerIndexPtr()) : -1;
   }
 };
 
@@ -122,6 +192,16 @@ class ReducedSystem {
       maxDiagonal_ = std::max(maxDiagonal_, base_[slot]);
     }
     for (int slot : p_.dualDiagonal) base_[slot] -= options.dualRegularisation;
+    // C_ia C_ib of every pair, in the scatter's order: the program's part of each iteration's
+    // C^T (Z/S) C, so an iteration only weights it.
+    const SpRow& C = qp.inequalities;
+    const double* v = C.valuePtr();
+    pairProducts_.reserve(p_.pairSlots.size());
+    for (int r = 0; r < C.outerSize(); ++r) {
+      const int begin = C.outerIndexPtr()[r], end = C.outerIndexPtr()[r + 1];
+      for (int a = begin; a < end; ++a)
+        for (int b = begin; b <= a; ++b) pairProducts_.push_back(v[a] * v[b]);
+    }
   }
   double shift() const { return shift_; }
 
@@ -134,12 +214,11 @@ class ReducedSystem {
     Eigen::Map<Vec> values(p_.K.valuePtr(), p_.K.nonZeros());
     for (int attempt = 0; attempt < 40; ++attempt) {
       values = base_;
-      const double* v = C.valuePtr();
+      const int* slots = p_.pairSlots.data();
+      const double* products = pairProducts_.data();
       for (int i = 0; i < C.outerSize(); ++i) {
-        const int begin = C.outerIndexPtr()[i], end = C.outerIndexPtr()[i + 1];
-        int p = p_.rowPairs[i];
-        for (int a = begin; a < end; ++a)
-          for (int b = begin; b <= a; ++b) values[p_.pairSlots[p++]] += w[i] * v[a] * v[b];
+        const double wi = w[i];
+        for (int p = p_.rowPairs[i], end = p_.rowPairs[i + 1]; p < end; ++p) values[slots[p]] += wi * products[p];
       }
       for (int slot : p_.diagonal) values[slot] += shift_;
       p_.ldlt.factorize(p_.K);
@@ -154,15 +233,17 @@ class ReducedSystem {
   // The solution of K [dx; dy] = rhs, refined twice against K (pivots of both signs without
   // pivoting lose digits).
   Vec solve(const Vec& rhs) const {
-    Vec d = p_.ldlt.solve(rhs);
-    for (int refine = 0; refine < 2; ++refine) d += p_.ldlt.solve(Vec(rhs - p_.K.selfadjointView<Eigen::Lower>() * d));
-    return d;
+    const Vec b = p_.permute(rhs);
+    Vec d = p_.ldlt.solve(b);
+    for (int refine = 0; refine < 2; ++refine) d += p_.ldlt.solve(Vec(b - p_.K.selfadjointView<Eigen::Upper>() * d));
+    return p_.unpermute(d);
   }
 
  private:
   const QuadraticProgram& qp_;
   QpWorkspace::Pattern& p_;
   Vec base_;
+  std::vector<double> pairProducts_;
   double maxDiagonal_ = 0, shift_ = 0;
 };
 
@@ -188,8 +269,14 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   QpWorkspace scratch;
   QpWorkspace& ws = workspace ? *workspace : scratch;
   std::vector<int> signature = patternOf(qp);
-  if (!ws.pattern_ || ws.pattern_->signature != signature)
-    ws.pattern_ = std::make_unique<QpWorkspace::Pattern>(qp, std::move(signature));
+  if (!ws.pattern_ || ws.pattern_->signature != signature) {
+    if (!ws.pattern_ || !ws.pattern_->assignSlots(qp)) {
+      const bool grow = ws.pattern_ && ws.pattern_->n == n && ws.pattern_->me == me;
+      ws.pattern_ = std::make_unique<QpWorkspace::Pattern>(qp, grow ? ws.pattern_.get() : nullptr);
+      ws.pattern_->assignSlots(qp);
+    }
+    ws.pattern_->signature = std::move(signature);
+  }
   ReducedSystem system(qp, options, *ws.pattern_);
   Vec x = Vec::Zero(n), y = Vec::Zero(me), z = Vec::Ones(mi), s = Vec::Ones(mi);
 

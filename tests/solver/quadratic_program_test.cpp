@@ -144,6 +144,49 @@ TEST(QuadraticProgram, MatchesEnumerationOfActiveSetsOnRandomPrograms) {
   EXPECT_GT(withActiveRows, 20);
 }
 
+TEST(QuadraticProgram, AWorkspaceSharedByProgramsWithChangingRowsGivesEachItsOwnSolution) {
+  // The SQP-type methods solve many programs of one problem on one workspace while inequality
+  // rows come and go; a program whose entries lie outside the pattern built so far makes it
+  // grow. Each program must get the solution a fresh workspace gives it, and the first again
+  // at the end (on the grown pattern).
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0, 1);
+  std::uniform_int_distribution<int> column(0, 29);
+  const int n = 30, me = 4;
+  Mat H = Mat::Zero(n, n);  // banded and convex
+  for (int i = 0; i < n; ++i) {
+    H(i, i) = 4;
+    if (i + 1 < n) H(i, i + 1) = H(i + 1, i) = -1;
+  }
+  Mat A = Mat::Zero(me, n);
+  for (int i = 0; i < me; ++i)
+    for (int j = 5 * i; j < 5 * i + 3; ++j) A(i, j) = normal(rng);
+  const Vec g = 5 * Vec::NullaryExpr(n, [&] { return normal(rng); });
+  const Vec b = Vec::Zero(me);
+  auto randomRows = [&](int rows) {
+    Mat C = Mat::Zero(rows, n);
+    for (int i = 0; i < rows; ++i)
+      for (int k = 0; k < 3; ++k) C(i, column(rng)) = normal(rng);
+    return C;
+  };
+  QpWorkspace shared;
+  std::vector<QuadraticProgram> programs;
+  for (int trial = 0; trial < 12; ++trial) {
+    const Mat C = randomRows(6 + trial);
+    programs.push_back(program(H, g, A, b, C, Vec::Constant(C.rows(), 0.5)));
+  }
+  programs.push_back(programs.front());
+  for (size_t k = 0; k < programs.size(); ++k) {
+    const QpResult fresh = solveQuadraticProgram(programs[k]);
+    const QpResult reused = solveQuadraticProgram(programs[k], {}, &shared);
+    ASSERT_TRUE(fresh.converged) << "program " << k << ": " << fresh.reason;
+    ASSERT_TRUE(reused.converged) << "program " << k << ": " << reused.reason;
+    EXPECT_LT((fresh.x - reused.x).lpNorm<Eigen::Infinity>(), 1e-7) << "program " << k;
+    EXPECT_LT((fresh.z - reused.z).lpNorm<Eigen::Infinity>(), 1e-6) << "program " << k;
+    EXPECT_LE((Mat(programs[k].inequalities) * reused.x - programs[k].inequalityBounds).maxCoeff(), 1e-8);
+  }
+}
+
 TEST(QuadraticProgram, ConcaveHessianGetsTheInertiaCorrection) {
   // min -1/2 |x|^2 on the box |x_i| <= 1: H is not convex; the solver adds a shift until the
   // system has the inertia of a convex program and solves that program.

@@ -60,8 +60,10 @@ struct QpResult {
 };
 
 // The symbolic part of a solve - K's pattern, where each matrix entry goes in it, the LDL^T's
-// ordering - kept between solves of programs with the same pattern (the steps of a restoration
-// or an SQP on one problem: 50 ms of the jump's 90 ms program).
+// ordering - kept between the solves of one problem (the steps of a restoration or an SQP). A
+// program whose entries all fall inside the pattern only looks up its slots; one that needs new
+// entries rebuilds it with the old entries kept, so the pattern grows to cover the inequality
+// rows that come and go between steps (an analysis is 50 ms of the jump's 90 ms program).
 class QpWorkspace {
  public:
   QpWorkspace();
