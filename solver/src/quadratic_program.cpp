@@ -46,14 +46,14 @@ std::vector<int> patternOf(const QuadraticProgram& qp) {
 }  // namespace
 
 // K in a pattern fixed for a family of programs, already permuted by a fill-reducing ordering
-// (so each factorisation reads K as stored instead of permuting a copy: a sixth of its time),
+// (so each factorisation reads K as stored instead of permuting a copy),
 // the slot in K's values of every entry the current program's matrices scatter into, and the
 // LDL^T's symbolic analysis. The SQP-type methods solve many programs on one problem whose
 // inequality rows come and go (the rows held near activity, the rows a step crosses); their
 // entries mostly fall inside a pattern already built, so a new program only looks up its slots,
 // and a program that needs new entries rebuilds the pattern with the old ones kept, so the
-// pattern grows to cover the family after a few rebuilds (the jump's sqp: 40 rebuilds of 75
-// programs before).
+// pattern grows to cover the family after a few rebuilds (a pattern per row set would be
+// rebuilt for 40 of the jump's 75 sqp programs).
 struct QpWorkspace::Pattern {
   std::vector<int> signature;  // patternOf the last program whose slots are assigned
   int n = 0, me = 0;
