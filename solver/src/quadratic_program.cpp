@@ -67,7 +67,7 @@ struct QpWorkspace::Pattern {
     n = static_cast<int>(qp.gradient.size());
     me = static_cast<int>(qp.equalities.rows());
     std::vector<Eigen::Triplet<double>> entries;  // lower triangle, unpermuted
-    forEachEntry(qp, [&](int row, int col) { entries.emplace_back(row, col, 1.0); });
+    forEachEntry(qp, [&](Entry, int row, int col) { entries.emplace_back(row, col, 1.0); }, [] {});
     if (previous)
       for (int k = 0; k < previous->K.outerSize(); ++k)
         for (SpMat::InnerIterator e(previous->K, k); e; ++e) {
@@ -101,23 +101,19 @@ struct QpWorkspace::Pattern {
   bool assignSlots(const QuadraticProgram& qp) {
     if (static_cast<int>(qp.gradient.size()) != n || static_cast<int>(qp.equalities.rows()) != me) return false;
     hessianSlots.clear(), equalitySlots.clear(), diagonal.clear(), dualDiagonal.clear();
-    pairSlots.clear(), rowPairs.clear();
-    for (int k = 0; k < qp.hessian.outerSize(); ++k)
-      for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
-        if (e.row() >= e.col()) hessianSlots.push_back(slot(static_cast<int>(e.row()), static_cast<int>(e.col())));
-    for (int k = 0; k < qp.equalities.outerSize(); ++k)
-      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) equalitySlots.push_back(slot(n + k, static_cast<int>(e.col())));
-    for (int i = 0; i < n; ++i) diagonal.push_back(slot(i, i));
-    for (int i = 0; i < me; ++i) dualDiagonal.push_back(slot(n + i, n + i));
-    const SpRow& C = qp.inequalities;
-    rowPairs.reserve(C.rows() + 1);
-    rowPairs.push_back(0);
-    for (int i = 0; i < C.outerSize(); ++i) {
-      for (SpRow::InnerIterator a(C, i); a; ++a)
-        for (SpRow::InnerIterator b(C, i); b && b.col() <= a.col(); ++b)
-          pairSlots.push_back(slot(static_cast<int>(a.col()), static_cast<int>(b.col())));
-      rowPairs.push_back(static_cast<int>(pairSlots.size()));
-    }
+    pairSlots.clear(), rowPairs.assign(1, 0);
+    forEachEntry(
+        qp,
+        [&](Entry kind, int row, int col) {
+          const int at = slot(row, col);
+          switch (kind) {
+            case Entry::Hessian: hessianSlots.push_back(at); break;
+            case Entry::Equality: equalitySlots.push_back(at); break;
+            case Entry::Pair: pairSlots.push_back(at); break;
+            case Entry::Diagonal: (row < n ? diagonal : dualDiagonal).push_back(at); break;
+          }
+        },
+        [&] { rowPairs.push_back(static_cast<int>(pairSlots.size())); });
     for (const auto* slots : {&hessianSlots, &equalitySlots, &diagonal, &dualDiagonal, &pairSlots})
       if (std::find(slots->begin(), slots->end(), -1) != slots->end()) return false;
     return true;
@@ -138,21 +134,25 @@ struct QpWorkspace::Pattern {
  private:
   Eigen::VectorXi original;
 
-  // Every entry of K's lower triangle (unpermuted) the program scatters into: H's lower
-  // triangle, A below H, the pairs of columns each inequality row touches, the diagonal.
-  template <typename Visit>
-  void forEachEntry(const QuadraticProgram& qp, Visit visit) const {
+  // Every entry of K's lower triangle (unpermuted) the program scatters into, by kind: H's lower
+  // triangle, A below H, the pairs of columns each inequality row touches (endRow after each
+  // row's), the diagonal. The pairs' order is the order of ReducedSystem's pair products.
+  enum class Entry { Hessian, Equality, Pair, Diagonal };
+  template <typename Visit, typename EndRow>
+  void forEachEntry(const QuadraticProgram& qp, Visit visit, EndRow endRow) const {
     for (int k = 0; k < qp.hessian.outerSize(); ++k)
       for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
-        if (e.row() >= e.col()) visit(static_cast<int>(e.row()), static_cast<int>(e.col()));
+        if (e.row() >= e.col()) visit(Entry::Hessian, static_cast<int>(e.row()), static_cast<int>(e.col()));
     for (int k = 0; k < qp.equalities.outerSize(); ++k)
-      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) visit(n + k, static_cast<int>(e.col()));
+      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) visit(Entry::Equality, n + k, static_cast<int>(e.col()));
     const SpRow& C = qp.inequalities;
-    for (int i = 0; i < C.outerSize(); ++i)
+    for (int i = 0; i < C.outerSize(); ++i) {
       for (SpRow::InnerIterator a(C, i); a; ++a)
         for (SpRow::InnerIterator b(C, i); b && b.col() <= a.col(); ++b)
-          visit(static_cast<int>(a.col()), static_cast<int>(b.col()));
-    for (int i = 0; i < n + me; ++i) visit(i, i);
+          visit(Entry::Pair, static_cast<int>(a.col()), static_cast<int>(b.col()));
+      endRow();
+    }
+    for (int i = 0; i < n + me; ++i) visit(Entry::Diagonal, i, i);
   }
 
   // Index into K's values of the entry (row, col) of the unpermuted K, or -1 if it is not in
