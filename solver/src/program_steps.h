@@ -46,6 +46,27 @@ inline bool holdCrossedRows(const Vec& linear, std::vector<int>* held) {
   return held->size() != before;
 }
 
+// The metric of the programs' inertia shift (QuadraticProgram::shiftMetric): 1 per variable,
+// 1 / weight^2 on each contact force - the variables in their natural units (forces as fractions
+// of the character's weight, as the cones and the load sharing read them). With the identity a
+// shift of 1e-3, which the jump's exact-Hessian programs need, weighs on the forces as 0.3 would
+// on the angles and damps the flat directions the steps converge along (its curvature there is
+// 1e-5 to 1e-4): 21 of the jump's 35 steps were that tail (docs/design.md, SQP).
+inline Vec shiftMetric(const SpacetimeProblem& problem, const Variables& vars) {
+  Vec metric = Vec::Ones(vars.tangent);
+  const double* x = problem.variables().data();
+  for (const ContactVariables& contact : problem.contacts()) {
+    const double weight = problem.characters()[static_cast<size_t>(contact.character)].weight;
+    for (size_t i = 0; i < contact.times.size(); ++i) {
+      const auto block = vars.columns.find(x + contact.forceOffset + static_cast<int>(i) * contact.blockSize());
+      if (block == vars.columns.end()) continue;
+      for (int column : block->second)
+        if (column >= 0) metric[column] = 1 / (weight * weight);
+    }
+  }
+  return metric;
+}
+
 // Hands the multipliers y (one per row: equalities free, inequalities >= 0) to the
 // augmented-Lagrangian state as lambda + rho c, so rho = 0 makes them the estimates themselves.
 // The polish holds at zero each inequality with a positive multiplier. An interior point leaves

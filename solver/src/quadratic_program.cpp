@@ -204,6 +204,8 @@ class ReducedSystem {
     }
   }
   double shift() const { return shift_; }
+  // The shift metric's entry for H's row i.
+  double metric(int i) const { return qp_.shiftMetric.size() ? qp_.shiftMetric[i] : 1.0; }
 
   // Factorises K for the inequality weights w = z / s; with allowShift, raising the shift on H
   // until K has the inertia of a convex program (n positive and m_e negative pivots). False if
@@ -220,7 +222,8 @@ class ReducedSystem {
         const double wi = w[i];
         for (int p = p_.rowPairs[i], end = p_.rowPairs[i + 1]; p < end; ++p) values[slots[p]] += wi * products[p];
       }
-      for (int slot : p_.diagonal) values[slot] += shift_;
+      if (shift_ > 0)
+        for (size_t i = 0; i < p_.diagonal.size(); ++i) values[p_.diagonal[i]] += shift_ * metric(static_cast<int>(i));
       p_.ldlt.factorize(p_.K);
       const auto& D = p_.ldlt.vectorD();
       if (p_.ldlt.info() == Eigen::Success && (D.array() < 0).count() == me && (D.array() != 0).all()) return true;
@@ -254,7 +257,8 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   const int n = static_cast<int>(qp.gradient.size());
   const int me = static_cast<int>(qp.equalities.rows()), mi = static_cast<int>(qp.inequalities.rows());
   if (qp.hessian.rows() != n || qp.hessian.cols() != n || qp.equalities.cols() != n || qp.inequalities.cols() != n ||
-      qp.equalityTargets.size() != me || qp.inequalityBounds.size() != mi) {
+      qp.equalityTargets.size() != me || qp.inequalityBounds.size() != mi ||
+      (qp.shiftMetric.size() && qp.shiftMetric.size() != n)) {
     result.reason = "the program's matrices and vectors do not agree in size";
     return result;
   }
@@ -288,7 +292,8 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   Vec rd, re, ri;
   auto residuals = [&] {
     // H as factorised: with the inertia correction's shift the convexified program is solved.
-    rd = H * x + system.shift() * x + g + A.transpose() * y + C.transpose() * z;
+    rd = H * x + g + A.transpose() * y + C.transpose() * z;
+    if (system.shift() > 0) rd += system.shift() * (qp.shiftMetric.size() ? Vec(qp.shiftMetric.cwiseProduct(x)) : x);
     re = A * x - b;
     ri = C * x + s - d;
   };

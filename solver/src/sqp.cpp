@@ -41,10 +41,18 @@ constexpr double kInitialPenalty = 100, kMaxPenalty = 1e8;
 constexpr double kHardMultiplierCap = 1e4;
 constexpr double kElasticCurvature = 1e-6;  // keeps the slacks' block of the program definite
 constexpr double kArmijo = 1e-4;
+// Second-order corrections of a rejected full step, each from the last corrected point while it
+// lowers the l1 violation by this factor (IPOPT's max_soc and kappa_soc). Near the solution the
+// jump's full steps move the forces far along flat directions and their violation is second
+// order (1.8e-4 -> 2.4e-2 at the full step, 1.9e-3, 2.5e-4, 3.1e-5 after one, two, three
+// corrections); far from it (Gauss-Newton programs) one correction, as more changed the path
+// of the 0.9 m rung and the doubled hurdle, which then handed over.
+constexpr int kMaxCorrections = 4;
+constexpr double kCorrectionContraction = 0.99;
 // Stationarity: |grad f + J^T y|_inf relative to max(1, |grad f|_inf), IPOPT's acceptable level.
-// Where the polish finishes it reaches 1e-8; where it cannot (the jump's optimum near IPOPT's,
-// whose reduced Hessian needs the programs' inertia correction) the steps converge linearly
-// and reach this in 35 steps (1e-8 would take hundreds).
+// Where the polish finishes it reaches 1e-8; steps whose programs need the inertia correction
+// can converge linearly (the jump's did, when its shift damped the forces as the angles: 35
+// steps to this level, 1e-8 would have taken hundreds).
 constexpr double kStationary = 1e-6;
 
 struct Merit {
@@ -78,6 +86,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   const raw::RowKinds kinds(evaluator);
   const std::vector<int>&objective = kinds.objective, &equality = kinds.equality, &inequality = kinds.inequality;
   const int me = static_cast<int>(equality.size());
+  const Vec metric = raw::shiftMetric(problem, vars);
   auto meritOf = [&](const Vec& v) {
     Merit m;
     m.f = 0.5 * raw::selectValues(v, objective).squaredNorm();
@@ -245,6 +254,8 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       program.inequalities.setFromTriplets(tc.begin(), tc.end());
       program.inequalityBounds = Vec::Zero(mh + 2 * pe + ke);
       program.inequalityBounds.head(mh) = -gh;
+      program.shiftMetric = Vec::Ones(N);
+      program.shiftMetric.head(n) = metric;
       qp = solveQuadraticProgram(program, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
       if (hard) {
         const double largest = std::max(qp.y.lpNorm<Eigen::Infinity>(), qp.z.size() ? qp.z.lpNorm<Eigen::Infinity>() : 0.0);
@@ -281,9 +292,9 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     for (size_t i = 0; i < heldRows.size(); ++i) yNew[heldRows[i]] = qp.z[static_cast<Eigen::Index>(i)];
 
     // Line search on the l1 merit; its directional derivative along d is grad.d - nu (l1 - the
-    // slacks' sum) (N&W eq. 18.29). A full step the merit rejects first tries the second-order
-    // correction: the same program with the rows' values at the trial point less their linear
-    // change (N&W 18.3).
+    // slacks' sum) (N&W eq. 18.29). A full step the merit rejects first tries second-order
+    // corrections: the same program with the rows' values at the trial point less their linear
+    // change (N&W 18.3), repeated from each corrected point (kMaxCorrections).
     phase = Clock::now();
     const double phi0 = merit.f + nu * merit.l1;
     const double slope = std::min(0.0, grad.dot(d) - nu * (merit.l1 - elasticSum));
@@ -300,23 +311,33 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
         break;
       }
       if (ls > 0) continue;
-      QuadraticProgram corrected = program;
-      corrected.equalityTargets = -(raw::selectValues(trial.values, equality) - A * d);
-      corrected.inequalityBounds.head(static_cast<Eigen::Index>(heldRows.size())) =
-          -(raw::selectValues(trial.values, heldRows) - C * d);
-      const Clock::time_point q0 = Clock::now();
-      const QpResult soc = solveQuadraticProgram(corrected, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
-      summary.qpSeconds += secondsSince(q0);
-      if (!soc.converged) continue;
-      RawRows correctedRows;
-      vars.plus(x0, soc.x.head(n));
-      if (!evaluator.evaluate(&correctedRows, true)) continue;
-      m = meritOf(correctedRows.values);
-      if (m.f + nu * m.l1 <= phi0 + kArmijo * slope) {
-        trial = std::move(correctedRows);
-        accepted = true;
-        break;
+      Vec corrected = d;
+      RawRows at = std::move(trial);
+      for (int k = 0; k < (gaussNewton ? 1 : kMaxCorrections) && !accepted; ++k) {
+        QuadraticProgram correction = program;
+        correction.equalityTargets = -(raw::selectValues(at.values, equality) - A * corrected);
+        correction.inequalityBounds.head(static_cast<Eigen::Index>(heldRows.size())) =
+            -(raw::selectValues(at.values, heldRows) - C * corrected);
+        const Clock::time_point q0 = Clock::now();
+        const QpResult soc = solveQuadraticProgram(correction, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
+        summary.qpSeconds += secondsSince(q0);
+        if (!soc.converged) break;
+        corrected = soc.x.head(n);
+        RawRows correctedRows;
+        vars.plus(x0, corrected);
+        if (!evaluator.evaluate(&correctedRows, true)) break;
+        const Merit mc = meritOf(correctedRows.values);
+        if (mc.f + nu * mc.l1 <= phi0 + kArmijo * slope) {
+          trial = std::move(correctedRows);
+          accepted = true;
+        } else if (mc.l1 > kCorrectionContraction * m.l1) {
+          break;
+        } else {
+          m = mc;
+          at = std::move(correctedRows);
+        }
       }
+      if (accepted) break;
     }
     summary.lineSearchSeconds += secondsSince(phase);
     if (!accepted) {

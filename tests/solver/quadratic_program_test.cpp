@@ -21,6 +21,7 @@ namespace {
 using Vec = Eigen::VectorXd;
 using Mat = Eigen::MatrixXd;
 using SpRow = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+using Vec2 = Eigen::Vector2d;
 
 QuadraticProgram program(const Mat& H, const Vec& g, const Mat& A, const Vec& b, const Mat& C, const Vec& d) {
   QuadraticProgram qp;
@@ -197,6 +198,33 @@ TEST(QuadraticProgram, ConcaveHessianGetsTheInertiaCorrection) {
   EXPECT_GE(r.shift, 1.0);
   ASSERT_TRUE(r.converged) << r.reason;
   EXPECT_LE((C * r.x).maxCoeff(), 1 + 1e-8);
+}
+
+TEST(QuadraticProgram, TheInertiaShiftActsThroughTheProgramsMetric) {
+  // min 1/2 x^T diag(-4, -0.04) x + g^T x on the box |x_i| <= 1 with the shift metric
+  // (1, 0.01): the second variable is in units a hundred times larger, and its curvature is
+  // shifted in its own scale. The first factorisation (each box row weighted 1) already lacks
+  // the inertia, so the shift holds from the start; the shifted program's minimiser, inside the
+  // box, is x_i = -g_i / (H_ii + shift m_i); with the identity metric the second component
+  // would be ~100 times smaller.
+  const Mat H = Vec(Vec2(-4.0, -0.04)).asDiagonal();
+  const Vec g = Vec2(0.5, 0.005), metric = Vec2(1.0, 0.01);
+  const Mat C = (Mat(4, 2) << Mat::Identity(2, 2), -Mat::Identity(2, 2)).finished();
+  QuadraticProgram qp = program(H, g, Mat::Zero(0, 2), Vec::Zero(0), C, Vec::Ones(4));
+  qp.shiftMetric = metric;
+  const QpResult r = solveQuadraticProgram(qp);
+  ASSERT_TRUE(r.converged) << r.reason;
+  ASSERT_GT(r.shift, 2.0);
+  for (int i = 0; i < 2; ++i) {
+    const double expected = -g[i] / (H(i, i) + r.shift * metric[i]);
+    ASSERT_LT(std::abs(expected), 1.0);
+    EXPECT_NEAR(r.x[i], expected, 1e-9 * (1 + std::abs(expected))) << i;
+  }
+  qp.shiftMetric.resize(0);
+  const QpResult identity = solveQuadraticProgram(qp);
+  ASSERT_TRUE(identity.converged) << identity.reason;
+  EXPECT_NEAR(identity.x[1], -g[1] / (H(1, 1) + identity.shift), 1e-9);
+  EXPECT_GT(std::abs(r.x[1]), 50 * std::abs(identity.x[1]));
 }
 
 TEST(QuadraticProgram, RedundantEqualityRowsStillSolve) {

@@ -46,7 +46,9 @@ TEST(Sqp, ParticleReachesTheAnalyticOptimumInOneStep) {
 
 // The shipped jump from the default guess: converged by the SQP's own steps (no least-squares
 // iteration), every validity check passes, and the objective is no higher than the augmented
-// Lagrangian's (measured: 28.1005 against 28.7735; IPOPT's 28.0987).
+// Lagrangian's (measured: 28.0987, IPOPT's optimum, against 28.7735). Its tail converges
+// fast: 14 steps; 35 when the inertia shift weighed on the forces as on the angles and a
+// rejected full step had one second-order correction.
 TEST(Sqp, LuxoJumpIsValidAndNoWorseThanTheAugmentedLagrangian) {
   const Scene scene = testing::shippedScene("luxo_jump.json");
   std::string error;
@@ -58,7 +60,7 @@ TEST(Sqp, LuxoJumpIsValidAndNoWorseThanTheAugmentedLagrangian) {
   ASSERT_TRUE(s.converged) << s.reason;
   EXPECT_EQ(s.iterations, 0) << s.reason;
   EXPECT_GT(s.sqpSteps, 0);
-  EXPECT_LE(s.sqpSteps, o.sqpMaxSteps);
+  EXPECT_LE(s.sqpSteps, 20);
   EXPECT_LE(s.maxViolation, o.tolerance);
   for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
     EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
@@ -74,6 +76,22 @@ TEST(Sqp, LuxoJumpIsValidAndNoWorseThanTheAugmentedLagrangian) {
   EXPECT_TRUE(warm.converged && warm.polished) << warm.reason;
   EXPECT_EQ(warm.iterations, 0);
   EXPECT_NEAR(warm.objective, s.objective, 1e-5 * s.objective);
+}
+
+// The ladder's 0.3 m rung: the SQP's own steps converge to a valid motion (with the identity
+// shift metric its steps crept for 60 steps and handed over to the augmented Lagrangian). Its
+// optimum, 20.6953, is another local one than the augmented Lagrangian's 19.8440.
+TEST(Sqp, TheShortJumpConvergesByItsOwnSteps) {
+  const Scene scene = testing::testScene("ladder/luxo_jump_0.3m.json");
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  const SolverSummary s = solveSpacetime(*problem, sqp());
+  ASSERT_TRUE(s.converged) << s.reason;
+  EXPECT_EQ(s.iterations, 0) << s.reason;
+  EXPECT_LT(s.sqpSteps, sqp().sqpMaxSteps) << s.reason;
+  for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
+    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
 }
 
 // Two pins at one instant in two places: the programs cannot meet both, the SQP hands over, and

@@ -16,9 +16,9 @@
 //     [ A                        -dy I ] [ dy ] = [ -r_e                          ]
 // by a sparse LDL^T whose pattern is analysed once (the band of H, C^T C and A^T A). H only
 // needs to be convex on the feasible directions; where the factorisation shows it is not (more
-// than |A| negative pivots, Sylvester's law of inertia) a multiple of the identity is added to
-// H for the rest of the solve and reported, as the inertia correction of Waechter & Biegler
-// (2006, section 3.1) does for a Newton step.
+// than |A| negative pivots, Sylvester's law of inertia) a multiple of a diagonal metric (the
+// identity unless the program gives one) is added to H for the rest of the solve and reported,
+// as the inertia correction of Waechter & Biegler (2006, section 3.1) does for a Newton step.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -34,6 +34,10 @@ struct QuadraticProgram {
   Eigen::VectorXd equalityTargets;                            // b
   Eigen::SparseMatrix<double, Eigen::RowMajor> inequalities;  // C (m_i x n)
   Eigen::VectorXd inequalityBounds;                           // d
+  // The inertia correction's metric: a shift adds shift * shiftMetric_i to H_ii (empty: the
+  // identity). Variables in other units than the rest - contact forces in newtons beside joint
+  // angles - are then damped in their own scale (see SQP in docs/design.md).
+  Eigen::VectorXd shiftMetric;
 };
 
 struct QpOptions {
@@ -54,7 +58,7 @@ struct QpResult {
   bool converged = false;
   Eigen::VectorXd x, y, z;  // the point, the equalities' and the inequalities' (z >= 0) multipliers
   int iterations = 0;
-  double shift = 0;  // multiple of the identity added to H (0 when H was convex enough)
+  double shift = 0;  // multiple of the shift metric added to H (0 when H was convex enough)
   double primalResidual = 0, dualResidual = 0, complementarity = 0;  // at x, unscaled, inf-norms
   std::string reason;
 };
