@@ -85,7 +85,10 @@ for b in rows:
     ms = t / 1e6 if unit == "ns" else t / 1e3 if unit == "us" else t if unit == "ms" else t * 1e3
     when = f"{ms:.3g} ms" if ms < 1000 else f"{ms / 1000:.3g} s"
     steps = ""
-    if "lm_iterations" in b:
+    if "sqp_steps" in b:  # the SQP: its steps, their time and their programs' part
+        steps = (f"{b['sqp_steps']:.0f} SQP steps, {b['sqp_ms_per_step']:.0f} ms each ({b['sqp_program_ms']:.0f} in programs), "
+                 f"then {b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}")
+    elif "lm_iterations" in b:
         steps = f"{b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}"
     elif "ip_iterations" in b:  # the interior point (IPOPT): its iterations and their cost
         steps = f"{b['ip_iterations']:.0f} IPOPT iterations"
@@ -98,7 +101,9 @@ for b in rows:
     if b.get("lm_ms_per_iteration"):
         lm = f"{b['lm_ms_per_iteration']:.2f} ({100 * b['lm_evaluation_share']:.0f} %, {100 * b['lm_linear_solver_share']:.0f} %)"
     if b.get("newton_ms_per_step"):
-        newton = f"{b['newton_ms_per_step']:.1f} ({b['newton_hessian_ms']:.1f}, {b['newton_factorisation_ms']:.1f}, {b['newton_line_search_ms']:.1f})"
+        newton = f"{b['newton_ms_per_step']:.1f}"
+        if "newton_hessian_ms" in b:
+            newton += f" ({b['newton_hessian_ms']:.1f}, {b['newton_factorisation_ms']:.1f}, {b['newton_line_search_ms']:.1f})"
     if "transcriptions" in b:
         steps += f", {b['transcriptions']:.0f} transcription(s)"
     print(f"| {name} | {when} | {steps} | {lm} | {newton} | {conv} |")
