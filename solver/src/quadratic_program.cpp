@@ -179,7 +179,8 @@ namespace {
 class ReducedSystem {
  public:
   ReducedSystem(const QuadraticProgram& qp, const QpOptions& options, QpWorkspace::Pattern& pattern)
-      : qp_(qp), p_(pattern), base_(Vec::Zero(pattern.K.nonZeros())) {
+      : qp_(qp), p_(pattern), base_(Vec::Zero(pattern.K.nonZeros())),
+        metric_(qp.shiftMetric.size() ? qp.shiftMetric : Vec(Vec::Ones(qp.gradient.size()))) {
     int i = 0;
     for (int k = 0; k < qp.hessian.outerSize(); ++k)
       for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
@@ -204,8 +205,8 @@ class ReducedSystem {
     }
   }
   double shift() const { return shift_; }
-  // The shift metric's entry for H's row i.
-  double metric(int i) const { return qp_.shiftMetric.size() ? qp_.shiftMetric[i] : 1.0; }
+  // The shift's metric: the program's, or the identity.
+  const Vec& metric() const { return metric_; }
 
   // Factorises K for the inequality weights w = z / s; with allowShift, raising the shift on H
   // until K has the inertia of a convex program (n positive and m_e negative pivots). False if
@@ -223,7 +224,7 @@ class ReducedSystem {
         for (int p = p_.rowPairs[i], end = p_.rowPairs[i + 1]; p < end; ++p) values[slots[p]] += wi * products[p];
       }
       if (shift_ > 0)
-        for (size_t i = 0; i < p_.diagonal.size(); ++i) values[p_.diagonal[i]] += shift_ * metric(static_cast<int>(i));
+        for (size_t i = 0; i < p_.diagonal.size(); ++i) values[p_.diagonal[i]] += shift_ * metric_[static_cast<Eigen::Index>(i)];
       p_.ldlt.factorize(p_.K);
       const auto& D = p_.ldlt.vectorD();
       if (p_.ldlt.info() == Eigen::Success && (D.array() < 0).count() == me && (D.array() != 0).all()) return true;
@@ -245,7 +246,7 @@ class ReducedSystem {
  private:
   const QuadraticProgram& qp_;
   QpWorkspace::Pattern& p_;
-  Vec base_;
+  Vec base_, metric_;
   std::vector<double> pairProducts_;
   double maxDiagonal_ = 0, shift_ = 0;
 };
@@ -293,7 +294,7 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   auto residuals = [&] {
     // H as factorised: with the inertia correction's shift the convexified program is solved.
     rd = H * x + g + A.transpose() * y + C.transpose() * z;
-    if (system.shift() > 0) rd += system.shift() * (qp.shiftMetric.size() ? Vec(qp.shiftMetric.cwiseProduct(x)) : x);
+    if (system.shift() > 0) rd += system.shift() * system.metric().cwiseProduct(x);
     re = A * x - b;
     ri = C * x + s - d;
   };

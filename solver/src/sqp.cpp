@@ -313,8 +313,8 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       if (ls > 0) continue;
       Vec corrected = d;
       RawRows at = std::move(trial);
+      QuadraticProgram correction = program;  // only its targets change between corrections
       for (int k = 0; k < (gaussNewton ? 1 : kMaxCorrections) && !accepted; ++k) {
-        QuadraticProgram correction = program;
         correction.equalityTargets = -(raw::selectValues(at.values, equality) - A * corrected);
         correction.inequalityBounds.head(static_cast<Eigen::Index>(heldRows.size())) =
             -(raw::selectValues(at.values, heldRows) - C * corrected);

@@ -51,11 +51,10 @@ void reportSteps(benchmark::State& state, const SolverSummary& s) {
   // Per KKT system solved: the polish's passes that only changed its active set cost nothing
   // and are not steps.
   const int solved = s.newtonSolves;
+  if (solved > 0) state.counters["newton_ms_per_step"] = 1e3 * s.polishSeconds / solved;
   // The summary's Hessian, factorisation and line-search times include the SQP's steps' own: the
   // split is the polish's only without them.
-  if (solved > 0 && s.sqpSteps > 0) state.counters["newton_ms_per_step"] = 1e3 * s.polishSeconds / solved;
   if (solved > 0 && s.sqpSteps == 0) {
-    state.counters["newton_ms_per_step"] = 1e3 * s.polishSeconds / solved;
     state.counters["newton_hessian_ms"] = 1e3 * s.hessianSeconds / solved;
     state.counters["newton_factorisation_ms"] = 1e3 * s.factorisationSeconds / solved;
     state.counters["newton_line_search_ms"] = 1e3 * s.lineSearchSeconds / solved;
