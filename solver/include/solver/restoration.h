@@ -15,6 +15,14 @@
 // constraints do not conflict) or the merit stops falling at a positive value with its
 // projected gradient near zero (a positive minimum: they conflict, locally).
 //
+// Gauss-Newton creeps where the rows stay far from zero: it leaves out the rows' own curvature
+// sum_i c_i grad^2 c_i, which a positive minimum's violation makes as large as J^T J. Asked for a
+// verdict, steps that end undecided are judged once more on the second-order model (that
+// curvature added, the exact Hessian of the merit): if it is convex there (the program needs no
+// inertia correction) and its minimum lies within kSecondOrderStationary of the merit, the
+// motion is a strict local minimum of the violation to that accuracy (Nocedal & Wright,
+// Theorem 2.4), a positive one.
+//
 // The damped least-squares restoration measured in docs/design.md, which held no inequality,
 // pushed clearances and cones over their bounds at every step and reached at best 5.7e-4 from
 // an augmented-Lagrangian iterate at 1e-3; with the inequalities in the program two steps reach
@@ -35,7 +43,8 @@ struct RestorationStep {
   bool elastic = false;  // the step needed elastic rows (the linearised inequalities had no point)
   double violationBefore = 0, violationAfter = 0;  // largest constraint row, before and after
   double meritBefore = 0, meritAfter = 0;          // 1/2 |c|^2 + 1/2 |max(0, g)|^2
-  double meritPredicted = 0;  // the linearised merit at the step (without the damping term)
+  double meritPredicted = 0;  // the model's merit at the step (without the damping term)
+  double shift = 0;           // the program's inertia correction (second-order model only)
   int qpIterations = 0;
   double qpSeconds = 0, seconds = 0;
   std::string reason;  // why no step was taken
@@ -64,8 +73,9 @@ class Restoration {
   bool ready() const;
   const std::string& error() const;
 
-  // One step with the given damping; a step whose program fails changes nothing.
-  RestorationStep step(double damping);
+  // One step with the given damping, on the Gauss-Newton model of the merit or (secondOrder)
+  // its exact second-order model; a step whose program fails changes nothing.
+  RestorationStep step(double damping, bool secondOrder = false);
 
   // Damped steps until the violation is within `tolerance`, a positive minimum of the merit, or
   // maxSteps / the deadline / `cancel` (checked between steps). The motion is the last accepted
@@ -73,6 +83,12 @@ class Restoration {
   RestorationResult minimiseViolation(double tolerance, int maxSteps,
                                       std::chrono::steady_clock::time_point deadline,
                                       const std::atomic<bool>* cancel = nullptr);
+
+  // The second-order verdict on an undecided `result` of minimiseViolation (see above): one
+  // program on the merit's exact second-order model at the motion, which only measures. True,
+  // and `result` says the positive minimum, if the model is convex there and falls by less
+  // than kSecondOrderStationary of the merit.
+  bool certifySecondOrderMinimum(RestorationResult* result);
 
  private:
   struct State;
