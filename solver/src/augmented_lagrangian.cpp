@@ -249,11 +249,12 @@ bool restorationPhase(SpacetimeProblem& problem, const SolverOptions& options, C
     return true;
   }
   const SolutionState stalled = problem.state();
+  const Clock::time_point start = Clock::now();
   RestorationResult r = restoration.minimiseViolation(options.tolerance, kSteps, stepsDeadline);
-  // Undecided steps get the second-order verdict while the solve has time for one program.
-  if (Clock::now() < deadline) restoration.certifySecondOrderMinimum(&r);
+  // Undecided steps get the second-order verdict within the solve's own deadline.
+  restoration.certifySecondOrderMinimum(&r, deadline);
   summary->restorationSteps = r.steps;
-  summary->restorationSeconds = r.seconds;
+  summary->restorationSeconds = secondsSince(start);
   switch (r.outcome) {
     case RestorationResult::Outcome::PositiveMinimum:
       problem.restore(stalled);

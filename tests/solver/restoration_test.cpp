@@ -148,7 +148,7 @@ TEST(Restoration, CertifiesAPositiveMinimumGaussNewtonOnlyApproaches) {
   RestorationResult r = restoration.minimiseViolation(1e-8, 15, deadline);
   std::printf("Gauss-Newton: %s\n", r.reason.c_str());
   EXPECT_EQ(r.outcome, RestorationResult::Outcome::Undecided) << "Gauss-Newton alone settled: " << r.reason;
-  EXPECT_TRUE(restoration.certifySecondOrderMinimum(&r));
+  EXPECT_TRUE(restoration.certifySecondOrderMinimum(&r, deadline));
   std::printf("second order: %s\n", r.reason.c_str());
   EXPECT_EQ(r.outcome, RestorationResult::Outcome::PositiveMinimum) << r.reason;
   EXPECT_NEAR(r.merit, 2.0, 1e-4);
@@ -159,7 +159,7 @@ TEST(Restoration, CertifiesAPositiveMinimumGaussNewtonOnlyApproaches) {
   RestorationResult f = feasible.minimiseViolation(1e-8, 1, deadline);
   ASSERT_EQ(f.outcome, RestorationResult::Outcome::Undecided) << f.reason;
   ASSERT_GT(f.violation, 1e-3);
-  EXPECT_FALSE(feasible.certifySecondOrderMinimum(&f)) << f.reason;
+  EXPECT_FALSE(feasible.certifySecondOrderMinimum(&f, deadline)) << f.reason;
   EXPECT_EQ(f.outcome, RestorationResult::Outcome::Undecided);
   EXPECT_EQ(feasible.minimiseViolation(1e-8, 30, deadline).outcome, RestorationResult::Outcome::Feasible);
 }

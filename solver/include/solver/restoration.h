@@ -17,11 +17,11 @@
 //
 // Gauss-Newton creeps where the rows stay far from zero: it leaves out the rows' own curvature
 // sum_i c_i grad^2 c_i, which a positive minimum's violation makes as large as J^T J. Asked for a
-// verdict, steps that end undecided are judged once more on the second-order model (that
-// curvature added, the exact Hessian of the merit): if it is convex there (the program needs no
+// verdict, steps that end undecided continue on the second-order model (that curvature added,
+// the exact Hessian of the merit): where it is convex with little damping (the program needs no
 // inertia correction) and its minimum lies within kSecondOrderStationary of the merit, the
-// motion is a strict local minimum of the violation to that accuracy (Nocedal & Wright,
-// Theorem 2.4), a positive one.
+// motion is an approximate second-order stationary point of the violation (the conditions of
+// Nocedal & Wright's Theorem 2.4 to that accuracy): a positive minimum, locally.
 //
 // The damped least-squares restoration measured in docs/design.md, which held no inequality,
 // pushed clearances and cones over their bounds at every step and reached at best 5.7e-4 from
@@ -84,11 +84,13 @@ class Restoration {
                                       std::chrono::steady_clock::time_point deadline,
                                       const std::atomic<bool>* cancel = nullptr);
 
-  // The second-order verdict on an undecided `result` of minimiseViolation (see above): one
-  // program on the merit's exact second-order model at the motion, which only measures. True,
-  // and `result` says the positive minimum, if the model is convex there and falls by less
-  // than kSecondOrderStationary of the merit.
-  bool certifySecondOrderMinimum(RestorationResult* result);
+  // The second-order verdict on an undecided `result` of minimiseViolation (see above): damped
+  // steps on the merit's exact second-order model (Levenberg-Marquardt's rule), until one whose
+  // model, nearly undamped, is convex and falls by less than kSecondOrderStationary of the merit
+  // - then true, and `result` says the positive minimum - or kSecondOrderSteps / the deadline.
+  // Steps that lower the merit are kept (and counted in `result`); the certifying one only
+  // measures.
+  bool certifySecondOrderMinimum(RestorationResult* result, std::chrono::steady_clock::time_point deadline);
 
  private:
   struct State;
