@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
 
 #include "raw_rows.h"
 #include "solver/quadratic_program.h"
@@ -40,6 +41,24 @@ constexpr double kAccuracyFloor = 1e-6;
 constexpr int kSecondOrderSteps = 15;
 constexpr double kSecondOrderDamping = 1e-4;
 constexpr double kSecondOrderStationary = 1e-6;
+
+// Levenberg-Marquardt's rule on the damping, for the Gauss-Newton and the second-order steps
+// alike: it starts here, falls after a step that lowers the merit and rises after one that
+// does not (which is undone).
+constexpr double kInitialDamping = 1e-6;
+double dampingAfterProgress(double damping) { return std::max(1e-12, damping / 3); }
+double dampingAfterFailure(double damping) { return 10 * damping; }
+
+// "N steps", or "1 step".
+std::string stepCount(int steps) { return std::to_string(steps) + (steps == 1 ? " step" : " steps"); }
+
+// The reason a positive minimum of the violation gives.
+std::string positiveMinimumReason(const RestorationResult& r) {
+  std::ostringstream why;
+  why << "minimising the violation alone ends at a positive minimum: largest row " << r.violation
+      << ", 1/2 |c|^2 = " << r.merit << " after " << stepCount(r.steps);
+  return why.str();
+}
 
 // min 1/2 dx^T M dx + b.dx subject to C dx <= d.
 QuadraticProgram hardProgram(const SpMat& M, const Vec& b, const SpRow& C, const Vec& d) {
@@ -239,9 +258,7 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
   }
   out.violation = st.violation(rows.values);
   out.merit = st.merit(rows.values);
-  // Levenberg-Marquardt's rule: the damping falls after a step that lowers the merit and rises
-  // after one that does not (which is undone).
-  double damping = 1e-6;
+  double damping = kInitialDamping;
   int sinceProgress = 0;
   // The steps stopped lowering the merit: a positive minimum, unless the violation is down at
   // the programs' own accuracy.
@@ -276,7 +293,7 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
       const double decrease = (s.meritBefore - s.meritAfter) / s.meritBefore;
       out.violation = s.violationAfter;
       out.merit = s.meritAfter;
-      damping = std::max(1e-12, damping / 3);
+      damping = dampingAfterProgress(damping);
       // A positive minimum: with little damping the steps stop lowering the merit.
       sinceProgress = decrease < 1e-6 && damping <= 1e-6 ? sinceProgress + 1 : 0;
       if (sinceProgress >= 3) {
@@ -285,7 +302,7 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
       }
     } else {
       if (s.taken) st.vars.load(before);
-      damping *= 10;
+      damping = dampingAfterFailure(damping);
       if (damping > 1e8) {
         // Even a step as short as the damping allows does not lower the merit.
         stoppedAtMinimum();
@@ -294,15 +311,14 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
     }
   }
   if (out.violation <= tolerance) out.outcome = RestorationResult::Outcome::Feasible;
-  const std::string steps = std::to_string(out.steps) + (out.steps == 1 ? " step" : " steps");
+  const std::string steps = stepCount(out.steps);
   std::ostringstream why;
   switch (out.outcome) {
     case RestorationResult::Outcome::Feasible:
       why << "minimising the violation alone met the constraints (" << out.violation << ") in " << steps;
       break;
     case RestorationResult::Outcome::PositiveMinimum:
-      why << "minimising the violation alone ends at a positive minimum: largest row " << out.violation
-          << ", 1/2 |c|^2 = " << out.merit << " after " << steps;
+      why << positiveMinimumReason(out);
       break;
     case RestorationResult::Outcome::Undecided:
       why << "minimising the violation alone reached a largest row of " << out.violation << " (1/2 |c|^2 = "
@@ -317,7 +333,7 @@ RestorationResult Restoration::minimiseViolation(double tolerance, int maxSteps,
 bool Restoration::certifySecondOrderMinimum(RestorationResult* result, Clock::time_point deadline) {
   if (result->outcome != RestorationResult::Outcome::Undecided || result->violation <= kAccuracyFloor) return false;
   State& st = *state_;
-  double damping = 1e-6;
+  double damping = kInitialDamping;
   bool certified = false;
   int kept = 0;
   for (int k = 0; k < kSecondOrderSteps && !certified && result->violation > kAccuracyFloor && Clock::now() <= deadline;
@@ -328,28 +344,26 @@ bool Restoration::certifySecondOrderMinimum(RestorationResult* result, Clock::ti
                 s.meritBefore - s.meritPredicted <= kSecondOrderStationary * s.meritBefore;
     if (certified || !(s.taken && s.meritAfter < s.meritBefore)) {
       st.vars.load(before);  // a certifying step only measures; a rejected one is undone
-      damping *= 10;
+      damping = dampingAfterFailure(damping);
     } else {
       ++result->steps, ++kept;
       result->violation = s.violationAfter;
       result->merit = s.meritAfter;
-      damping = std::max(1e-12, damping / 3);
+      damping = dampingAfterProgress(damping);
     }
   }
   if (!certified) {
     if (kept) {
       std::ostringstream more;
-      more << "; " << kept << " second-order " << (kept == 1 ? "step" : "steps") << " then reached " << result->violation
+      more << "; " << stepCount(kept) << " on the second-order model then reached " << result->violation
            << " (1/2 |c|^2 = " << result->merit << ") without a minimum";
       result->reason += more.str();
     }
     return false;
   }
   std::ostringstream why;
-  why << "minimising the violation alone ends at a positive minimum: largest row " << result->violation
-      << ", 1/2 |c|^2 = " << result->merit << " after " << result->steps << (result->steps == 1 ? " step" : " steps")
-      << ", where the merit's exact second-order model is convex and falls by less than " << kSecondOrderStationary
-      << " of it";
+  why << positiveMinimumReason(*result) << ", where the merit's exact second-order model is convex and falls by less than "
+      << kSecondOrderStationary << " of it";
   result->outcome = RestorationResult::Outcome::PositiveMinimum;
   result->reason = why.str();
   return true;
