@@ -80,7 +80,9 @@ TEST(Sqp, LuxoJumpIsValidAndNoWorseThanTheAugmentedLagrangian) {
 
 // The ladder's 0.3 m rung: the SQP's own steps converge to a valid motion (with the identity
 // shift metric its steps crept for 60 steps and handed over to the augmented Lagrangian). Its
-// optimum, 20.6953, is another local one than the augmented Lagrangian's 19.8440.
+// optimum, 20.6953, is another local one than the augmented Lagrangian's 19.8440. Its eleventh
+// step (Gauss-Newton, at a violation of 3e-3) is cut to 1/32: with the exact Hessian from there
+// it takes 13 steps; with Gauss-Newton down to a violation of 1e-3 it took 24.
 TEST(Sqp, TheShortJumpConvergesByItsOwnSteps) {
   const Scene scene = testing::testScene("ladder/luxo_jump_0.3m.json");
   std::string error;
@@ -89,7 +91,7 @@ TEST(Sqp, TheShortJumpConvergesByItsOwnSteps) {
   const SolverSummary s = solveSpacetime(*problem, sqp());
   ASSERT_TRUE(s.converged) << s.reason;
   EXPECT_EQ(s.iterations, 0) << s.reason;
-  EXPECT_LT(s.sqpSteps, sqp().sqpMaxSteps) << s.reason;
+  EXPECT_LE(s.sqpSteps, 18) << s.reason;
   for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
     EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
 }
