@@ -126,7 +126,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   };
   auto polish = [&] { return raw::polishInto(problem, options, threads, deadline, cancel, &summary); };
 
-  bool exactHessian = false;  // once a Gauss-Newton step crept (kCreepingStep)
+  bool exactHessian = false;  // from the first step cut to kCreepingStep or less on
   int creepingSteps = 0;      // in a row
   RawRows rows;
   if (!evaluator.evaluate(&rows, true)) why = "the rows at the starting point are not finite";
