@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <unordered_map>
 #include <vector>
 
 namespace spacetime {
@@ -60,6 +61,17 @@ struct QpWorkspace::Pattern {
   Eigen::VectorXi position;  // position[i]: where K's row and column i sit in the permuted K
   SpMat K;                   // the upper triangle of the permuted K, column-major
   std::vector<int> hessianSlots, equalitySlots, diagonal, dualDiagonal, pairSlots, rowPairs;
+  // The layouts (outer and inner indices) hessianSlots and equalitySlots were looked up for, and
+  // the pair slots of each inequality row's column list.
+  std::vector<int> hessianLayout, equalityLayout;
+  struct ColumnsHash {
+    size_t operator()(const std::vector<int>& v) const {
+      size_t h = 1469598103934665603ull;  // FNV-1a over the indices
+      for (int i : v) h = (h ^ static_cast<size_t>(static_cast<unsigned>(i))) * 1099511628211ull;
+      return h;
+    }
+  };
+  std::unordered_map<std::vector<int>, std::vector<int>, ColumnsHash> rowSlots;
   Eigen::SimplicialLDLT<SpMat, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
 
   // A pattern holding every entry `qp` scatters into and every entry of `previous`.
@@ -67,7 +79,7 @@ struct QpWorkspace::Pattern {
     n = static_cast<int>(qp.gradient.size());
     me = static_cast<int>(qp.equalities.rows());
     std::vector<Eigen::Triplet<double>> entries;  // lower triangle, unpermuted
-    forEachEntry(qp, [&](Entry, int row, int col) { entries.emplace_back(row, col, 1.0); }, [] {});
+    forEachEntry(qp, [&](int row, int col) { entries.emplace_back(row, col, 1.0); });
     if (previous)
       for (int k = 0; k < previous->K.outerSize(); ++k)
         for (SpMat::InnerIterator e(previous->K, k); e; ++e) {
@@ -98,25 +110,64 @@ struct QpWorkspace::Pattern {
   }
 
   // Looks up the slot of every entry `qp` scatters into; false if one is not in the pattern.
+  // H's and A's slots are kept while their patterns repeat (an SQP's programs of one kind share
+  // them), and an inequality row's pairs depend only on its columns, which the rows of one
+  // sample share: they are looked up once per column list. Looking up every entry took 4 ms of
+  // each of the jump's programs (docs/performance.md, sqp).
   bool assignSlots(const QuadraticProgram& qp) {
     if (static_cast<int>(qp.gradient.size()) != n || static_cast<int>(qp.equalities.rows()) != me) return false;
-    hessianSlots.clear(), equalitySlots.clear(), diagonal.clear(), dualDiagonal.clear();
+    if (diagonal.empty())
+      for (int i = 0; i < n + me; ++i) (i < n ? diagonal : dualDiagonal).push_back(slot(i, i));
+    if (!sameLayout(qp.hessian, &hessianLayout)) {
+      hessianSlots.clear();
+      for (int k = 0; k < qp.hessian.outerSize(); ++k)
+        for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
+          if (e.row() >= e.col()) hessianSlots.push_back(slot(static_cast<int>(e.row()), static_cast<int>(e.col())));
+    }
+    if (!sameLayout(qp.equalities, &equalityLayout)) {
+      equalitySlots.clear();
+      for (int k = 0; k < qp.equalities.outerSize(); ++k)
+        for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) equalitySlots.push_back(slot(n + k, static_cast<int>(e.col())));
+    }
     pairSlots.clear(), rowPairs.assign(1, 0);
-    forEachEntry(
-        qp,
-        [&](Entry kind, int row, int col) {
-          const int at = slot(row, col);
-          switch (kind) {
-            case Entry::Hessian: hessianSlots.push_back(at); break;
-            case Entry::Equality: equalitySlots.push_back(at); break;
-            case Entry::Pair: pairSlots.push_back(at); break;
-            case Entry::Diagonal: (row < n ? diagonal : dualDiagonal).push_back(at); break;
-          }
-        },
-        [&] { rowPairs.push_back(static_cast<int>(pairSlots.size())); });
+    const SpRow& C = qp.inequalities;
+    std::vector<int> columns;
+    for (int i = 0; i < C.outerSize(); ++i) {
+      columns.assign(C.innerIndexPtr() + C.outerIndexPtr()[i], C.innerIndexPtr() + C.outerIndexPtr()[i + 1]);
+      auto cached = rowSlots.find(columns);
+      if (cached == rowSlots.end()) {
+        std::vector<int> slots;
+        for (size_t a = 0; a < columns.size(); ++a)
+          for (size_t b = 0; b <= a; ++b) slots.push_back(slot(columns[a], columns[b]));
+        cached = rowSlots.emplace(columns, std::move(slots)).first;
+      }
+      pairSlots.insert(pairSlots.end(), cached->second.begin(), cached->second.end());
+      rowPairs.push_back(static_cast<int>(pairSlots.size()));
+    }
     for (const auto* slots : {&hessianSlots, &equalitySlots, &diagonal, &dualDiagonal, &pairSlots})
-      if (std::find(slots->begin(), slots->end(), -1) != slots->end()) return false;
+      if (std::find(slots->begin(), slots->end(), -1) != slots->end()) {
+        hessianLayout.clear(), equalityLayout.clear();  // looked up again on the next program
+        return false;
+      }
     return true;
+  }
+
+  // Whether m's outer and inner indices are those in `layout`; if not, `layout` takes them.
+  template <typename Matrix>
+  static bool sameLayout(const Matrix& m, std::vector<int>* layout) {
+    const int outer = static_cast<int>(m.outerSize()), nonZeros = static_cast<int>(m.nonZeros());
+    const size_t size = static_cast<size_t>(outer) + 1 + static_cast<size_t>(nonZeros) + 2;
+    if (m.isCompressed() && layout->size() == size && (*layout)[0] == outer && (*layout)[1] == nonZeros &&
+        std::equal(m.outerIndexPtr(), m.outerIndexPtr() + outer + 1, layout->begin() + 2) &&
+        std::equal(m.innerIndexPtr(), m.innerIndexPtr() + nonZeros, layout->begin() + 3 + outer))
+      return true;
+    layout->clear();
+    if (!m.isCompressed()) return false;
+    layout->push_back(outer);
+    layout->push_back(nonZeros);
+    layout->insert(layout->end(), m.outerIndexPtr(), m.outerIndexPtr() + outer + 1);
+    layout->insert(layout->end(), m.innerIndexPtr(), m.innerIndexPtr() + nonZeros);
+    return false;
   }
 
   // Permutes a vector of K's rows into the factorisation's order and back.
@@ -134,25 +185,21 @@ struct QpWorkspace::Pattern {
  private:
   Eigen::VectorXi original;
 
-  // Every entry of K's lower triangle (unpermuted) the program scatters into, by kind: H's lower
-  // triangle, A below H, the pairs of columns each inequality row touches (endRow after each
-  // row's), the diagonal. The pairs' order is the order of ReducedSystem's pair products.
-  enum class Entry { Hessian, Equality, Pair, Diagonal };
-  template <typename Visit, typename EndRow>
-  void forEachEntry(const QuadraticProgram& qp, Visit visit, EndRow endRow) const {
+  // Every entry of K's lower triangle (unpermuted) the program scatters into: H's lower
+  // triangle, A below H, the pairs of columns each inequality row touches, the diagonal.
+  template <typename Visit>
+  void forEachEntry(const QuadraticProgram& qp, Visit visit) const {
     for (int k = 0; k < qp.hessian.outerSize(); ++k)
       for (SpMat::InnerIterator e(qp.hessian, k); e; ++e)
-        if (e.row() >= e.col()) visit(Entry::Hessian, static_cast<int>(e.row()), static_cast<int>(e.col()));
+        if (e.row() >= e.col()) visit(static_cast<int>(e.row()), static_cast<int>(e.col()));
     for (int k = 0; k < qp.equalities.outerSize(); ++k)
-      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) visit(Entry::Equality, n + k, static_cast<int>(e.col()));
+      for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) visit(n + k, static_cast<int>(e.col()));
     const SpRow& C = qp.inequalities;
-    for (int i = 0; i < C.outerSize(); ++i) {
+    for (int i = 0; i < C.outerSize(); ++i)
       for (SpRow::InnerIterator a(C, i); a; ++a)
         for (SpRow::InnerIterator b(C, i); b && b.col() <= a.col(); ++b)
-          visit(Entry::Pair, static_cast<int>(a.col()), static_cast<int>(b.col()));
-      endRow();
-    }
-    for (int i = 0; i < n + me; ++i) visit(Entry::Diagonal, i, i);
+          visit(static_cast<int>(a.col()), static_cast<int>(b.col()));
+    for (int i = 0; i < n + me; ++i) visit(i, i);
   }
 
   // Index into K's values of the entry (row, col) of the unpermuted K, or -1 if it is not in
