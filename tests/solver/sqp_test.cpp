@@ -96,23 +96,29 @@ TEST(Sqp, TheShortJumpConvergesByItsOwnSteps) {
     EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
 }
 
+// Solves a shipped scene with `sqp` from the default guess and expects its steps to hand over
+// for `why`, within `maxSteps`, and the augmented Lagrangian to solve it valid at `objective`.
+void expectHandOver(const char* name, const std::string& why, int maxSteps, double objective, double tolerance) {
+  const Scene scene = testing::shippedScene(name);
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  const SolverSummary s = solveSpacetime(*problem, sqp());
+  ASSERT_TRUE(s.converged) << s.reason;
+  EXPECT_NE(s.reason.find(why), std::string::npos) << s.reason;
+  EXPECT_LE(s.sqpSteps, maxSteps) << s.reason;
+  EXPECT_NEAR(s.objective, objective, tolerance) << s.reason;
+  for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
+    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
+}
+
 // The planar biped from the default guess: from its sixth step the line search cuts every step to
 // 1/16 or less, with Gauss-Newton programs and then with the exact Hessian (its contact points'
 // motion rows curve more than either model follows). Ten such steps in a row hand over to the
 // augmented Lagrangian, which solves it valid (1879.454); the steps used to creep for all 60
 // (41 s in all, against 20 s).
 TEST(Sqp, CreepingStepsHandOverToTheAugmentedLagrangian) {
-  const Scene scene = testing::shippedScene("biped_jump.json");
-  std::string error;
-  auto problem = SpacetimeProblem::build(scene, &error);
-  ASSERT_TRUE(problem) << error;
-  const SolverSummary s = solveSpacetime(*problem, sqp());
-  ASSERT_TRUE(s.converged) << s.reason;
-  EXPECT_NE(s.reason.find("steps in a row"), std::string::npos) << s.reason;
-  EXPECT_LE(s.sqpSteps, 20) << s.reason;
-  EXPECT_NEAR(s.objective, 1879.45397, 1e-3) << s.reason;
-  for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
-    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
+  expectHandOver("biped_jump.json", "steps in a row", 20, 1879.45397, 1e-3);
 }
 
 // The power-formula scene (its objective, joint power, is not convex): its exact-Hessian programs
@@ -121,17 +127,7 @@ TEST(Sqp, CreepingStepsHandOverToTheAugmentedLagrangian) {
 // augmented Lagrangian, which solves it valid at 3980.45; the steps used to run to the limit
 // of 60 (10.9 s in all, against 8.5 s).
 TEST(Sqp, FeasibleStepsThatStopApproachingAKktPointHandOver) {
-  const Scene scene = testing::shippedScene("luxo_power_formula.json");
-  std::string error;
-  auto problem = SpacetimeProblem::build(scene, &error);
-  ASSERT_TRUE(problem) << error;
-  const SolverSummary s = solveSpacetime(*problem, sqp());
-  ASSERT_TRUE(s.converged) << s.reason;
-  EXPECT_NE(s.reason.find("stopped approaching a KKT point"), std::string::npos) << s.reason;
-  EXPECT_LE(s.sqpSteps, 30) << s.reason;
-  EXPECT_NEAR(s.objective, 3980.4512, 1e-2) << s.reason;
-  for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
-    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
+  expectHandOver("luxo_power_formula.json", "stopped approaching a KKT point", 30, 3980.4512, 1e-2);
 }
 
 // Two pins at one instant in two places: the programs cannot meet both, the SQP hands over, and
