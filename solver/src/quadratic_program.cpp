@@ -113,7 +113,7 @@ struct QpWorkspace::Pattern {
   // H's and A's slots are kept while their patterns repeat (an SQP's programs of one kind share
   // them), and an inequality row's pairs depend only on its columns, which the rows of one
   // sample share: they are looked up once per column list. Looking up every entry took 4 ms of
-  // each of the jump's programs (docs/performance.md, sqp).
+  // each of the jump's programs (docs/design.md, Solver item 6).
   bool assignSlots(const QuadraticProgram& qp) {
     if (static_cast<int>(qp.gradient.size()) != n || static_cast<int>(qp.equalities.rows()) != me) return false;
     if (diagonal.empty())
