@@ -186,8 +186,7 @@ int run(int argc, char** argv) {
   options.threads = threads;
   options.maxSeconds = maxSeconds;
   // In budget seconds: an instrumented build's stretched budget counts its setup stretched too.
-  options.spentSeconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() / instrumentedTimeScale();
+  options.spentSeconds = budgetSecondsSince(started);
   options.newtonPolish = polish;
   if (!method.empty()) parseSolverMethod(method, &options.method);
   // What the interior point cannot take is refused before anything is solved or written.

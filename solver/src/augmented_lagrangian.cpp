@@ -128,6 +128,10 @@ double instrumentedTimeScale() {
   return scale;
 }
 
+double budgetSecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / instrumentedTimeScale();
+}
+
 std::chrono::steady_clock::time_point SolverOptions::deadlineFrom(std::chrono::steady_clock::time_point start) const {
   using Clock = std::chrono::steady_clock;
   const double seconds = std::clamp((maxSeconds - spentSeconds) * instrumentedTimeScale(), 0.0, 1e9);
@@ -281,7 +285,7 @@ void interiorPointAfterStall(SpacetimeProblem& problem, const SolverOptions& opt
   SolverOptions ip = options;
   ip.method = SolverMethod::InteriorPoint;
   ip.interiorPointMaxIterations = options.interiorPointAfterStallIterations;
-  ip.spentSeconds = options.spentSeconds + secondsSince(start) / instrumentedTimeScale();
+  ip.spentSeconds = options.spentSeconds + budgetSecondsSince(start);
   if (!(ip.spentSeconds < ip.maxSeconds)) return;
   const SolutionState stalled = problem.state();
   const SolverSummary r = solveInteriorPoint(problem, ip, callback, cancel);

@@ -133,7 +133,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     best.attempts.push_back(attempt);
 
     // In budget seconds (SolverOptions::deadlineFrom stretches budgets by the time scale).
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count() / instrumentedTimeScale();
+    const double elapsed = budgetSecondsSince(start);
     if (!refinement.enabled || level >= refinement.maxRefinements || !refinable(attempt.status, attempt.valid) ||
         (cancel && cancel->load()) || spentBefore + elapsed >= options.maxSeconds)
       break;

@@ -412,7 +412,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     summary.reason = "cancelled by the user; the starting motion is kept";
     return finish(SolveStatus::Cancelled);
   }
-  al.spentSeconds += secondsSince(start);
+  al.spentSeconds += budgetSecondsSince(start);
   SolverSummary fallback = solveSpacetime(problem, al, callback, cancel);
   fallback.method = SolverMethod::Sqp;
   raw::addPhaseTo(summary, &fallback);

@@ -118,7 +118,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     approach.maxOuterIterations = kApproachUpdates;
     approach.newtonPolish = false;
     approach.interiorPointAfterStall = false;
-    approach.spentSeconds += secondsSince(start);
+    approach.spentSeconds += budgetSecondsSince(start);
     const SolverSummary a = solveSpacetime(problem, approach, callback, cancel);
     raw::addPhaseTo(a, &summary);
     std::ostringstream s;
@@ -284,7 +284,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     problem.restore(initial);
     reason << ", then the augmented Lagrangian from the starting motion: ";
   }
-  al.spentSeconds += secondsSince(start);
+  al.spentSeconds += budgetSecondsSince(start);
   SolverSummary finished = solveSpacetime(problem, al, callback, cancel);
   finished.method = SolverMethod::WitkinKass;
   raw::addPhaseTo(summary, &finished);

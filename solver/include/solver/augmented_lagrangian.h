@@ -61,8 +61,9 @@ struct SolverOptions {
   double warmRestartPenalty = 1e4;
   double maxSeconds = 300;       // wall-clock budget of the whole solve, Newton polish included
   // Seconds of that budget already spent before this solve (the CLI's setup, the coarser
-  // transcriptions of a refined solve): the solve stops at maxSeconds - spentSeconds, and its
-  // reason names the whole budget.
+  // transcriptions of a refined solve, a method's steps before it hands over), in budget
+  // seconds (budgetSecondsSince): the solve stops at maxSeconds - spentSeconds, and its reason
+  // names the whole budget.
   double spentSeconds = 0;
   int threads = 1;               // Ceres evaluation threads
   bool warmStart = false;        // keep the problem's current multipliers and penalty
@@ -117,6 +118,9 @@ struct SolverOptions {
 // jump's augmented Lagrangian 32 times), and every wall-clock budget of a solve (maxSeconds,
 // --max-seconds, the scene's limit) stretches by it. The tests' own waits read it too.
 double instrumentedTimeScale();
+// Wall-clock seconds since `start` in budget seconds (divided by instrumentedTimeScale()): what a
+// phase of a solve adds to SolverOptions::spentSeconds before the next phase starts.
+double budgetSecondsSince(std::chrono::steady_clock::time_point start);
 
 // The options a scene asks for (its `solver` block); the rest keep their defaults.
 SolverOptions solverOptionsFor(const SolverSpec& spec);
