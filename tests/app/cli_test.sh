@@ -179,9 +179,9 @@ SPACETIME_TIME_SCALE=$((scale * 100)) "$cli" solve "$scenes/luxo_jump.json" --ou
 # take ~5 s of wall clock before they hand over, witkin-kass's projected steps on the jump ~1 s;
 # counted undivided they used up the 0.5 s budget and the fallback stopped at once).
 for run in "sqp luxo_power_formula" "witkin-kass luxo_jump"; do
-  set -- $run
-  SPACETIME_TIME_SCALE=$((scale * 100)) "$cli" solve "$scenes/$2.json" --out "$tmp/handover_$1" --method "$1" \
-    --max-seconds 0.5 --quiet 2>/dev/null || fail "$1 on $2 with a stretched 0.5 s budget exited $?"
+  read -r method scene <<< "$run"
+  SPACETIME_TIME_SCALE=$((scale * 100)) "$cli" solve "$scenes/$scene.json" --out "$tmp/handover_$method" --method "$method" \
+    --max-seconds 0.5 --quiet 2>/dev/null || fail "$method on $scene with a stretched 0.5 s budget exited $?"
 done
 for bad in "--threads 0" "--threads x" "--max-seconds -1"; do
   "$cli" solve "$scenes/particle.json" --out "$tmp/bad_option" $bad 2>/dev/null

@@ -125,7 +125,7 @@ TEST(Sqp, CreepingStepsHandOverToTheAugmentedLagrangian) {
 // need an inertia shift of ~190 and from its 17th step the steps stay within the tolerance while
 // the stationarity rises (1.0e-5 -> 1.9e-5 over 40 steps). Ten such steps hand over to the
 // augmented Lagrangian, which solves it valid at 3980.45; the steps used to run to the limit
-// of 60 (10.9 s in all, against 8.5 s).
+// of 60 (10.9 s in all, against 7.8 s).
 TEST(Sqp, FeasibleStepsThatStopApproachingAKktPointHandOver) {
   expectHandOver("luxo_power_formula.json", "stopped approaching a KKT point", 30, 3980.4512, 1e-2);
 }
