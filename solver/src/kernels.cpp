@@ -306,7 +306,7 @@ BodyRestKernel::BodyRestKernel(std::shared_ptr<const Model<double>> model, int b
 template <class T>
 void BodyRestKernel::compute(const T* z, T* rows) const {
   Data<T>& data = scratchData<T>(*model_);
-  forwardKinematics(*model_, data, z, z + model_->dofCount(), static_cast<const T*>(nullptr));
+  chainKinematics(*model_, data, body_, z, z + model_->dofCount(), static_cast<const T*>(nullptr));
   const Vec6<T> v = data.v[body_].vector();
   for (int i = 0; i < 6; ++i) rows[i] = v[i];
 }
@@ -390,7 +390,7 @@ template <class T>
 void ContactPointMotionKernel::compute(const T* z, T* rows) const {
   const int n = model_->dofCount();
   Data<T>& data = scratchData<T>(*model_);
-  forwardKinematics(*model_, data, z, z + n, order_ == 2 ? z + 2 * n : static_cast<const T*>(nullptr));
+  chainKinematics(*model_, data, still_.body(), z, z + n, order_ == 2 ? z + 2 * n : static_cast<const T*>(nullptr));
   still_.write(data, order_, rows);
 }
 SPACETIME_DEFINE_EVALUATORS(ContactPointMotionKernel)

@@ -164,6 +164,35 @@ TEST_P(RandomModels, BodyPoseEqualsForwardKinematics) {
   }
 }
 
+// One body's chain swept alone gives it, and each of its ancestors, the pose, velocity and
+// acceleration of the whole forward sweep, and leaves the other bodies as they were.
+TEST_P(RandomModels, ChainKinematicsEqualsForwardKinematics) {
+  std::mt19937 rng(37);
+  const Model<double> model = buildModel(testing::randomCharacter(rng, 7, GetParam()), {0, -g, 0});
+  const int n = model.dofCount();
+  Data<double> full(model), chain(model);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd q = testing::randomVector(rng, n, 2), qd = testing::randomVector(rng, n, 2),
+                          qdd = testing::randomVector(rng, n, 2);
+    forwardKinematics(model, full, q.data(), qd.data(), qdd.data());
+    for (int b = 0; b < model.bodyCount(); ++b) {
+      for (int i = 0; i < model.bodyCount(); ++i) chain.v[i].lin.setConstant(1e300);  // untouched unless swept
+      chainKinematics(model, chain, b, q.data(), qd.data(), qdd.data());
+      std::vector<bool> onChain(model.bodyCount(), false);
+      for (int i = b; i >= 0; i = model.bodies[i].parent) onChain[i] = true;
+      for (int i = 0; i < model.bodyCount(); ++i) {
+        if (!onChain[i]) {
+          EXPECT_EQ(chain.v[i].lin.x(), 1e300) << "body " << i << " swept for " << b;
+          continue;
+        }
+        EXPECT_EQ((chain.X_world[i].matrix() - full.X_world[i].matrix()).norm(), 0.0) << "body " << i;
+        EXPECT_EQ((chain.v[i].vector() - full.v[i].vector()).norm(), 0.0) << "body " << i;
+        EXPECT_EQ((chain.a[i].vector() - full.a[i].vector()).norm(), 0.0) << "body " << i;
+      }
+    }
+  }
+}
+
 // RNEA composing only the forced bodies' world poses gives the same generalized forces.
 TEST_P(RandomModels, RneaWithoutAllWorldPosesIsTheSame) {
   std::mt19937 rng(31);

@@ -24,37 +24,43 @@ Motion<T> baseAcceleration(const Model<S>& model, bool withGravity) {
   return a0;
 }
 
-// The forward sweep shared by FK and RNEA (RBDA Table 5.1, first loop).
-// worldPoses = false leaves X_world alone (RNEA itself needs only X_parent).
+// One body's step of the forward sweep (RBDA Table 5.1, first loop): its parent's entries in d
+// must be current. worldPoses = false leaves X_world alone (RNEA itself needs only X_parent).
+template <class T, class S>
+void sweepBody(const Model<S>& model, Data<T>& d, int i, const T* q, const T* qd, const T* qdd, const Motion<T>& a0,
+               bool worldPoses) {
+  const Body<S>& b = model.bodies[i];
+  const int k = b.dofIndex;
+  const Transform<T> XJ = k >= 0 ? b.joint.template transform<T>(q[k]) : Transform<T>();
+  d.X_parent[i] = compose(XJ, b.X_tree);
+  if (worldPoses) d.X_world[i] = b.parent >= 0 ? d.X_parent[i] * d.X_world[b.parent] : d.X_parent[i];
+  Motion<T> vJ, aJ;
+  if (k >= 0) {
+    const Motion<S> Sj = b.joint.motionSubspace();
+    const T qdk = qd ? qd[k] : T(0), qddk = qdd ? qdd[k] : T(0);
+    for (int c = 0; c < 3; ++c) {
+      vJ.ang(c) = Sj.ang(c) * qdk;
+      vJ.lin(c) = Sj.lin(c) * qdk;
+      aJ.ang(c) = Sj.ang(c) * qddk;
+      aJ.lin(c) = Sj.lin(c) * qddk;
+    }
+  }
+  if (b.parent >= 0) {
+    d.v[i] = d.X_parent[i].apply(d.v[b.parent]) + vJ;
+    d.a[i] = d.X_parent[i].apply(d.a[b.parent]) + aJ + crossMotion(d.v[i], vJ);
+  } else {
+    d.v[i] = vJ;
+    d.a[i] = d.X_parent[i].apply(a0) + aJ;
+  }
+}
+
+// The forward sweep shared by FK and RNEA, every body in order (parents first).
 template <class T, class S>
 void forwardSweep(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd,
                   const Motion<T>& a0, bool worldPoses = true) {
-  for (int i = 0; i < model.bodyCount(); ++i) {
-    const Body<S>& b = model.bodies[i];
-    const int k = b.dofIndex;
-    const Transform<T> XJ = k >= 0 ? b.joint.template transform<T>(q[k]) : Transform<T>();
-    d.X_parent[i] = compose(XJ, b.X_tree);
-    if (worldPoses) d.X_world[i] = b.parent >= 0 ? d.X_parent[i] * d.X_world[b.parent] : d.X_parent[i];
-    Motion<T> vJ, aJ;
-    if (k >= 0) {
-      const Motion<S> Sj = b.joint.motionSubspace();
-      const T qdk = qd ? qd[k] : T(0), qddk = qdd ? qdd[k] : T(0);
-      for (int c = 0; c < 3; ++c) {
-        vJ.ang(c) = Sj.ang(c) * qdk;
-        vJ.lin(c) = Sj.lin(c) * qdk;
-        aJ.ang(c) = Sj.ang(c) * qddk;
-        aJ.lin(c) = Sj.lin(c) * qddk;
-      }
-    }
-    if (b.parent >= 0) {
-      d.v[i] = d.X_parent[i].apply(d.v[b.parent]) + vJ;
-      d.a[i] = d.X_parent[i].apply(d.a[b.parent]) + aJ + crossMotion(d.v[i], vJ);
-    } else {
-      d.v[i] = vJ;
-      d.a[i] = d.X_parent[i].apply(a0) + aJ;
-    }
-  }
+  for (int i = 0; i < model.bodyCount(); ++i) sweepBody(model, d, i, q, qd, qdd, a0, worldPoses);
 }
+
 // A body's world pose from the sweep's X_parent along its chain.
 template <class T, class S>
 Transform<T> chainPose(const Model<S>& model, const Data<T>& d, int body) {
@@ -84,6 +90,25 @@ void forwardKinematics(const Model<S>& model, Data<T>& d, const T* q) {
 template <class T, class S>
 void forwardKinematics(const Model<S>& model, Data<T>& d, const T* q, const T* qd, const T* qdd) {
   detail::forwardSweep<T, S>(model, d, q, qd, qdd, Motion<T>());
+}
+
+// forwardKinematics for one body's chain only: its ancestors and itself, root first, get the
+// poses, velocities and accelerations the full sweep gives them (the same operations in the
+// same order); the other bodies' entries in d are left as they were. Kernels that read one
+// body's motion (a contact point kept still) skip the rest of the tree: the full sweep on Jets
+// was a fifth of a legged character's solve.
+template <class T, class S>
+void chainKinematics(const Model<S>& model, Data<T>& d, int body, const T* q, const T* qd, const T* qdd) {
+  int chain[64], length = 0;
+  for (int i = body; i >= 0; i = model.bodies[i].parent) {
+    if (length == 64) {  // deeper than any character: the whole tree
+      forwardKinematics(model, d, q, qd, qdd);
+      return;
+    }
+    chain[length++] = i;
+  }
+  const Motion<T> a0;
+  while (length > 0) detail::sweepBody(model, d, chain[--length], q, qd, qdd, a0, true);
 }
 
 // The pose (world -> body, as Data::X_world) of one body from q alone: the joint and tree

@@ -193,6 +193,7 @@ class ContactStillRows {
  public:
   ContactStillRows(ContactPoints contact, int forceDims);
   int count() const { return forceDims_ + static_cast<int>(turns_.size()); }
+  int body() const { return contact_.body; }  // the body whose motion write() reads
   // Writes count() rows from kinematics already run to `order`; returns the next row.
   template <class T>
   T* write(const Data<T>& data, int order, T* rows) const;
