@@ -2,10 +2,11 @@
 # Builds the core and dynamics test suites with AddressSanitizer + UndefinedBehaviorSanitizer
 # (the asan-ubsan preset of CMakePresets.json, in build-asan/) and runs them, leaks detected.
 # The whole suite (`cmake --build --preset asan-ubsan && ctest --preset asan-ubsan`) is a long
-# job, not part of scripts/test.sh: the preset builds at -O2 -g1 (22 minutes on the 2-core
-# machine, the Ceres-heavy translation units most of it) and its tests run with
-# SPACETIME_TIME_SCALE=30, every solve's budget and every test's wait stretched thirtyfold, since
-# an instrumented solve is tens of times slower (the suite then takes hours).
+# job, not part of scripts/test.sh: the preset builds at -O2 -g1 with ASan's checks inlined
+# (about 20 minutes on the 2-core machine, the Ceres-heavy translation units most of it) and its
+# tests run with SPACETIME_TIME_SCALE=30, every solve's budget and every test's wait stretched
+# thirtyfold, since an instrumented solve is about 7 times slower (the suite takes more than an
+# hour on two cores; docs/validation.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --preset asan-ubsan > /dev/null
