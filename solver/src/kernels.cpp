@@ -422,6 +422,25 @@ void FrictionConeKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(FrictionConeKernel)
 
+// --- ContactWrenchConeKernel -------------------------------------------------------------
+
+ContactWrenchConeKernel::ContactWrenchConeKernel(double mu, double weightScale, std::string label)
+    : mu_(mu), scale_(weightScale) {
+  label_ = std::move(label);
+  inputs_ = 4;
+  kinds_.assign(4, RowKind::Inequality);
+}
+
+template <class T>
+void ContactWrenchConeKernel::compute(const T* z, T* rows) const {
+  const T fx = z[0] + z[2], fy = z[1] + z[3];
+  rows[0] = -z[1] * scale_;  // each point pushes: |M| <= a F_y
+  rows[1] = -z[3] * scale_;
+  rows[2] = (fx - mu_ * fy) * scale_;
+  rows[3] = (-fx - mu_ * fy) * scale_;
+}
+SPACETIME_DEFINE_EVALUATORS(ContactWrenchConeKernel)
+
 // --- ImpactKernel ------------------------------------------------------------------------
 
 ImpactKernel::ImpactKernel(std::shared_ptr<const Model<double>> model, std::vector<ContactPoints> contacts,

@@ -137,8 +137,10 @@ GroupBasis splineBasis(const DofGroup& g, const BSplineBasis& b, const std::arra
 
 SpacetimeProblem::SpacetimeProblem(const Scene& scene) : scene_(scene) {}
 
-std::unique_ptr<SpacetimeProblem> SpacetimeProblem::build(const Scene& scene, std::string* error) {
+std::unique_ptr<SpacetimeProblem> SpacetimeProblem::build(const Scene& scene, std::string* error,
+                                                          ContactLayout layout) {
   std::unique_ptr<SpacetimeProblem> p(new SpacetimeProblem(scene));
+  p->contactLayout_ = layout;
   if (!p->assemble(error)) return nullptr;
   return p;
 }
@@ -438,6 +440,25 @@ std::pair<int, double> ContactVariables::interpolation(double t) const {
   return {i, std::clamp((t - times[i]) / (times[i + 1] - times[i]), 0.0, 1.0)};
 }
 
+Eigen::MatrixXd ContactVariables::split() const {
+  if (!resultant) return Eigen::MatrixXd::Identity(pointForceSize(), pointForceSize());
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(4, 3);
+  S(0, 0) = S(2, 0) = 0.5;  // the points' x: half of Fx each
+  S(1, 1) = S(3, 1) = 0.5;  // their y: half of Fy each,
+  S(1, 2) = -1;             // less and plus D
+  S(3, 2) = 1;
+  return S;
+}
+
+Eigen::MatrixXd ContactVariables::gather() const {
+  if (!resultant) return Eigen::MatrixXd::Identity(pointForceSize(), pointForceSize());
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3, 4);
+  G(0, 0) = G(0, 2) = 1;       // Fx
+  G(1, 1) = G(1, 3) = 1;       // Fy
+  G(2, 1) = -0.5, G(2, 3) = 0.5;  // D
+  return G;
+}
+
 void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scale) {
   // Forces are linear between the contact's samples; terms imposed between samples (a formula
   // constraint at any instant of a contact) read the two neighbours.
@@ -445,16 +466,29 @@ void SpacetimeProblem::addForceInputs(InputMap& in, int j, double t, double scal
 }
 
 void SpacetimeProblem::addForceInputs(InputMap& in, int j, std::pair<int, double> at, double scale) {
+  // z = the points' forces, split() times the sample's variables.
   const ContactVariables& cv = contacts_[j];
   const int size = cv.blockSize();
-  const int row0 = in.newRows(size);
+  const Eigen::MatrixXd S = cv.split();
+  const int row0 = in.newRows(cv.pointForceSize());
   const auto [i, a] = at;
-  const int blk = in.block(x_.data() + cv.forceOffset + i * size, size);
-  for (int d = 0; d < size; ++d) in.add(row0 + d, blk, d, scale * (1 - a));
-  if (a != 0) {
-    const int next = in.block(x_.data() + cv.forceOffset + (i + 1) * size, size);
-    for (int d = 0; d < size; ++d) in.add(row0 + d, next, d, scale * a);
-  }
+  auto addSample = [&](int sample, double w) {
+    const int blk = in.block(x_.data() + cv.forceOffset + sample * size, size);
+    for (int r = 0; r < S.rows(); ++r)
+      for (int d = 0; d < size; ++d)
+        if (S(r, d) != 0) in.add(row0 + r, blk, d, scale * w * S(r, d));
+  };
+  addSample(i, 1 - a);
+  if (a != 0) addSample(i + 1, a);
+}
+
+void SpacetimeProblem::setSampleForces(int j, int sample, const std::vector<Eigen::Vector3d>& forces) {
+  const ContactVariables& ct = contacts_[j];
+  Eigen::VectorXd f(ct.pointForceSize());
+  for (int p = 0; p < static_cast<int>(ct.points.points.size()); ++p)
+    for (int k = 0; k < ct.forceDims; ++k) f[p * ct.forceDims + k] = forces[static_cast<size_t>(p)][k];
+  const Eigen::VectorXd u = ct.gather() * f;
+  for (int d = 0; d < ct.blockSize(); ++d) x_[ct.forceOffset + sample * ct.blockSize() + d] = u[d];
 }
 
 void SpacetimeProblem::addBlockInputs(InputMap& in, int offset, int size, double scale) {
@@ -579,6 +613,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     cv.friction = t.friction;
     cv.forceDims = ch.forceDims;
     cv.holdsRoot = fixesRoot(cv.character, cv.points);
+    cv.resultant = contactLayout_ == ContactLayout::Resultants && cv.forceDims == 2 && t.points.size() == 2;
     cv.times = intervalTimes(transcription_, t.character, t.start, t.end, cv.holdsRoot);
     cv.forceOffset = size;
     size += cv.blockSize() * static_cast<int>(cv.times.size());
@@ -586,7 +621,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
     size += 2 * static_cast<int>(t.points.size());
     if (touchesDownWithImpact(t, scene_) && ch.groups.size() > 1) {
       cv.impulseOffset = size;
-      size += cv.blockSize();
+      size += cv.pointForceSize();
     }
     contacts_.push_back(cv);
   }
@@ -772,7 +807,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
       const TimeRef r = timeRef(ct.character, smp.time);
       const std::pair<int, double> force = ct.interpolation(smp.time);
       const double scale = 1.0 / cv.weight;  // as fractions of the weight
-      addResidualAt(std::make_shared<WeightedValueKernel>(ct.blockSize(), obj.contactForce * smp.weight,
+      addResidualAt(std::make_shared<WeightedValueKernel>(ct.pointForceSize(), obj.contactForce * smp.weight,
                                                           at(label + " load sharing", smp.time)),
                     r.event, [this, r, jj, force, scale](InputMap& in, double T) {
                       addForceInputs(in, jj, force, scale);
@@ -790,14 +825,20 @@ bool SpacetimeProblem::assemble(std::string* error) {
       if (releases && time == ct.times.back()) {
         std::vector<std::pair<int, double>> zero;
         for (int d = 0; d < ct.blockSize(); ++d) zero.emplace_back(d, 0.0);
-        addForceInputs(in, jj, time, 1.0 / cv.weight);
+        // On the sample's own variables: the split's rows would repeat Fx = 0.
+        addBlockInputs(in, ct.forceOffset + (static_cast<int>(ct.times.size()) - 1) * ct.blockSize(), ct.blockSize(),
+                       1.0 / cv.weight);
         addResidual(std::make_shared<TargetKernel>(ct.blockSize(), zero, at(label + " lift-off", time)), in);
         continue;
       }
       addForceInputs(in, jj, time);
-      addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction,
-                                                       1.0 / cv.weight, at(label + " cone", time)),
-                  in);
+      if (ct.resultant)
+        addResidual(std::make_shared<ContactWrenchConeKernel>(ct.friction, 1.0 / cv.weight, at(label + " cone", time)),
+                    in);
+      else
+        addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction, 1.0 / cv.weight,
+                                                         at(label + " cone", time)),
+                    in);
     }
     if (ct.impact()) addImpactTerms(jj);
   }
@@ -863,7 +904,7 @@ void SpacetimeProblem::addImpactTerms(int j) {
     std::vector<char> held;
     std::string names = label;
     for (int k : group) {
-      addBlockInputs(in, contacts_[k].impulseOffset, contacts_[k].blockSize());
+      addBlockInputs(in, contacts_[k].impulseOffset, contacts_[k].pointForceSize());
       points.push_back(contacts_[k].points);
       held.push_back(contacts_[k].holdsRoot);
       if (k != j) names += " and '" + scene_.terms[contacts_[k].term].id + "'";
@@ -873,7 +914,7 @@ void SpacetimeProblem::addImpactTerms(int j) {
                 in);
   }
   InputMap imp;
-  addBlockInputs(imp, ct.impulseOffset, ct.blockSize());
+  addBlockInputs(imp, ct.impulseOffset, ct.pointForceSize());
   const int points = static_cast<int>(ct.points.points.size());
   addResidual(std::make_shared<FrictionConeKernel>(points, ct.forceDims, ct.friction, impulseScale,
                                                    at(label + " impulse cone", t)),
@@ -882,8 +923,8 @@ void SpacetimeProblem::addImpactTerms(int j) {
   // minimum-norm term picks the even split.
   if (scene_.objective.contactForce > 0) {
     InputMap share;
-    addBlockInputs(share, ct.impulseOffset, ct.blockSize(), impulseScale);
-    addResidual(std::make_shared<WeightedValueKernel>(ct.blockSize(), scene_.objective.contactForce * h,
+    addBlockInputs(share, ct.impulseOffset, ct.pointForceSize(), impulseScale);
+    addResidual(std::make_shared<WeightedValueKernel>(ct.pointForceSize(), scene_.objective.contactForce * h,
                                                       at(label + " impulse sharing", t)),
                 share);
   }
@@ -924,7 +965,7 @@ bool SpacetimeProblem::addFormulaTerms(std::string* error) {
     auto tape = formulaTape(c, si.active, expression, why);
     if (!tape) return false;
     int inputs = 3 * characters_[c].dofs;
-    for (int j : si.active) inputs += contacts_[j].blockSize();
+    for (int j : si.active) inputs += contacts_[j].pointForceSize();
     addResidualAt(std::make_shared<FormulaKernel>(tape, inputs, time, kind, scale, value, label, source),
                   si.ref.event, [this, si, kind](InputMap& in, double T) {
                     addSampleInputs(in, si, T);
@@ -1094,12 +1135,12 @@ void SpacetimeProblem::initialGuess() {
     }
   }
   // Contact forces: the weight shared among the contact's points; anchors under the points.
-  for (const ContactVariables& ct : contacts_) {
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    const ContactVariables& ct = contacts_[j];
     const CharacterVariables& cv = characters_[ct.character];
     const int points = static_cast<int>(ct.points.points.size());
-    for (size_t k = 0; k < ct.times.size(); ++k)
-      for (int p = 0; p < points; ++p)
-        x_[ct.forceOffset + k * ct.blockSize() + p * ct.forceDims + 1] = cv.weight / points;
+    const std::vector<Eigen::Vector3d> shared(static_cast<size_t>(points), Eigen::Vector3d(0, cv.weight / points, 0));
+    for (size_t k = 0; k < ct.times.size(); ++k) setSampleForces(static_cast<int>(j), static_cast<int>(k), shared);
     const Eigen::VectorXd q = jointState(ct.character, ct.start, 0);
     Data<double> data(*cv.model);
     forwardKinematics(*cv.model, data, q.data());
@@ -1176,10 +1217,17 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
   // Linear interpolation between the samples around t.
   const auto [i, a] = ct.interpolation(t);
   const size_t i1 = std::min<size_t>(i + 1, ct.times.size() - 1);
+  const int size = ct.blockSize();
+  const Eigen::VectorXd u = (1 - a) * Eigen::Map<const Eigen::VectorXd>(x_.data() + ct.forceOffset + i * size, size) +
+                            a * Eigen::Map<const Eigen::VectorXd>(x_.data() + ct.forceOffset + i1 * size, size);
+  const Eigen::VectorXd f = ct.split() * u;
   for (int p = 0; p < points; ++p)
-    for (int k = 0; k < ct.forceDims; ++k)
-      out[p][k] = (1 - a) * x_[ct.forceOffset + i * ct.blockSize() + p * ct.forceDims + k] +
-                  a * x_[ct.forceOffset + i1 * ct.blockSize() + p * ct.forceDims + k];
+    for (int k = 0; k < ct.forceDims; ++k) out[p][k] = f[p * ct.forceDims + k];
+  // A resultant's horizontal force is reported shared in proportion to the points' normal
+  // forces: then each point's force is in its own cone exactly when the resultant is in the
+  // contact wrench cone (the split the dynamics reads has the same wrench).
+  if (ct.resultant && u[1] > 0)
+    for (int p = 0; p < points; ++p) out[p].x() = u[0] * out[p].y() / u[1];
   return out;
 }
 
@@ -1241,18 +1289,16 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
     const std::string& id = scene_.terms[ct.term].id;
     for (size_t j = 0; j < previous.contacts().size(); ++j) {
       const ContactVariables& old = previous.contacts()[j];
-      if (previous.scene().terms[old.term].id != id || old.blockSize() != ct.blockSize()) continue;
+      if (previous.scene().terms[old.term].id != id || old.pointForceSize() != ct.pointForceSize()) continue;
       for (size_t i = 0; i < ct.times.size(); ++i) {
         // Forces at the old interval's matching instant (the interval may have moved).
         const double u = (ct.times[i] - ct.start) / (ct.end - ct.start);
-        const std::vector<Eigen::Vector3d> f =
-            previous.contactForces(static_cast<int>(j), old.start + u * (old.end - old.start));
-        for (size_t p = 0; p < f.size(); ++p)
-          for (int k = 0; k < ct.forceDims; ++k) x_[ct.forceOffset + i * ct.blockSize() + p * ct.forceDims + k] = f[p][k];
+        setSampleForces(static_cast<int>(&ct - contacts_.data()), static_cast<int>(i),
+                        previous.contactForces(static_cast<int>(j), old.start + u * (old.end - old.start)));
       }
       for (size_t a = 0; a < 2 * ct.points.points.size(); ++a) x_[ct.anchorOffset + a] = previous.variables()[old.anchorOffset + a];
       if (ct.impact() && old.impact())
-        for (int k = 0; k < ct.blockSize(); ++k) x_[ct.impulseOffset + k] = previous.variables()[old.impulseOffset + k];
+        for (int k = 0; k < ct.pointForceSize(); ++k) x_[ct.impulseOffset + k] = previous.variables()[old.impulseOffset + k];
     }
   }
   // Multipliers do not transfer (their rows differ), but the penalty does: it keeps the next
@@ -1265,9 +1311,11 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
 
 SpacetimeProblem::WarmStart SpacetimeProblem::warmStartFrom(const Scene& source, const SolutionState& state) {
   if (restore(state)) return WarmStart::Exact;
-  std::string ignored;
-  const std::unique_ptr<SpacetimeProblem> previous = build(source, &ignored);
-  if (previous && previous->restore(state) && initializeFrom(*previous) > 0) return WarmStart::Refitted;
+  for (ContactLayout layout : {ContactLayout::Resultants, ContactLayout::PointForces}) {
+    std::string ignored;
+    const std::unique_ptr<SpacetimeProblem> previous = build(source, &ignored, layout);
+    if (previous && previous->restore(state)) return initializeFrom(*previous) > 0 ? WarmStart::Refitted : WarmStart::None;
+  }
   return WarmStart::None;
 }
 

@@ -239,6 +239,22 @@ class FrictionConeKernel : public Kernel {
   double mu_, scale_;
 };
 
+// The contact wrench cone of a planar contact of two points on one body (Caron, Pham and
+// Nakamura 2015, "Stability of surface contacts for humanoid robots", in the plane): the
+// resultant (F_x, F_y, M) of forces in the points' cones is exactly the set with
+// |F_x| <= mu F_y and |M| <= a F_y (the points at +-a on the ground), the latter being both
+// points' normal forces >= 0. z = the two points' forces (any split of the resultant); rows
+// -f0y, -f1y, +-(f0x + f1x) - mu (f0y + f1y), scaled by 1 / (m g).
+class ContactWrenchConeKernel : public Kernel {
+ public:
+  ContactWrenchConeKernel(double mu, double weightScale, std::string label);
+  SPACETIME_KERNEL_EVALUATORS
+  int nonlinearInputs() const override { return 0; }  // linear rows
+
+ private:
+  double mu_, scale_;
+};
+
 // Contacts that begin in flight: a rigid impact at the touch-down instant (Featherstone RBDA
 // section 11.6; Witkin & Kass' spacetime with an instantaneous collision). Velocities jump, the
 // configuration does not: M(q) (qd+ - qd-) = sum_c J_c(q)^T L_c, with L_c the ground impulses of

@@ -188,14 +188,27 @@ struct ContactVariables {
   int anchorOffset = 0;  // 2 values (x, z) per point
   // A contact that begins after the clip's start on a floating character touches down with an
   // impact: the root's velocity jumps at `start` (its Hermite data has two breakpoints there)
-  // and the points receive a ground impulse (blockSize() values, N s, world axes).
+  // and the points receive a ground impulse (pointForceSize() values, N s, world axes).
   int impulseOffset = -1;  // -1: no impact
   bool impact() const { return impulseOffset >= 0; }
   int freeEnd = -1;  // index into SpacetimeProblem::freeEnds() if the end is a variable
   // The points fix the floating root's pose (its body is the root body and they are not
   // collinear): the root is held constant over the contact (see layoutHeldStances).
   bool holdsRoot = false;
-  int blockSize() const { return forceDims * static_cast<int>(points.points.size()); }
+  // A planar contact of two points on one body is carried as its resultant: per sample
+  // u = (Fx, Fy, D), the points' forces f0 = (Fx/2, Fy/2 - D), f1 = (Fx/2, Fy/2 + D). Both
+  // points are on the ground, so horizontal forces of the same sum give the same wrench and
+  // this split loses nothing; the per-point variables it replaces had a direction no row
+  // reads (the squeeze: equal and opposite horizontal forces), which made the programs'
+  // minimisers non-unique (docs/design.md, SQP). The cone is then the contact wrench cone
+  // (ContactWrenchConeKernel).
+  bool resultant = false;
+  int pointForceSize() const { return forceDims * static_cast<int>(points.points.size()); }
+  int blockSize() const { return resultant ? 3 : pointForceSize(); }
+  // The points' forces of one sample from its variables: f = split() u (pointForceSize x
+  // blockSize), and the variables whose split has the same resultant as f: u = gather() f.
+  Eigen::MatrixXd split() const;
+  Eigen::MatrixXd gather() const;
   int sampleIndex(double t) const;  // -1 if t is not one of `times`
   // The sample at or before t and the weight of the next one (forces are linear between
   // samples; t is clamped to the samples' span).
@@ -211,8 +224,13 @@ struct SolutionState {
 
 class SpacetimeProblem {
  public:
+  // How a planar two-point contact's forces are carried: as its resultant (ContactVariables::
+  // resultant), or - the layout of states stored before that, which warm starts still read -
+  // as the points' forces.
+  enum class ContactLayout { Resultants, PointForces };
   // Builds the problem; on an impossible scene returns null and a reason.
-  static std::unique_ptr<SpacetimeProblem> build(const Scene& scene, std::string* error);
+  static std::unique_ptr<SpacetimeProblem> build(const Scene& scene, std::string* error,
+                                                  ContactLayout layout = ContactLayout::Resultants);
 
   const Scene& scene() const { return scene_; }
   const Transcription& transcription() const { return transcription_; }
@@ -243,6 +261,9 @@ class SpacetimeProblem {
   Eigen::VectorXd jointStateOnSide(int character, double t, int order, Side side) const;
   // World force of each point of a contact at time t (zero outside its interval).
   std::vector<Eigen::Vector3d> contactForces(int contact, double t) const;
+  // Sets the variables of a contact's sample to the given points' forces (a resultant: to
+  // theirs, which the points then share as contactForces reports).
+  void setSampleForces(int contact, int sample, const std::vector<Eigen::Vector3d>& forces);
   // Whether contact j's points leave the ground at its end: it ends before the clip does and no
   // other contact carries any of its points on. Their force is then zero at that instant.
   bool letsGo(int j) const;
@@ -282,8 +303,9 @@ class SpacetimeProblem {
 
   // Starts from `state`, a solution of the problem of `source`: exactly (restore) when this
   // problem has that layout - a resumed solve, an edit that moved a pin - and otherwise re-fitted
-  // to this transcription (initializeFrom; multipliers start at zero). False when neither
-  // applies (no character in common); this problem then keeps its default guess.
+  // to this transcription (initializeFrom; multipliers start at zero), a state stored with the
+  // points' forces too. None when neither applies (no character in common); this problem then
+  // keeps its default guess.
   enum class WarmStart { None, Exact, Refitted };
   WarmStart warmStartFrom(const Scene& source, const SolutionState& state);
 
@@ -294,6 +316,7 @@ class SpacetimeProblem {
  private:
   explicit SpacetimeProblem(const Scene& scene);
   bool assemble(std::string* error);
+  ContactLayout contactLayout_ = ContactLayout::Resultants;
   void initialGuess();
   void addResidual(std::shared_ptr<const Kernel> kernel, const InputMap& inputs);
   // A residual whose inputs `fill` builds at the event time T of free end `event`: built once
