@@ -58,7 +58,7 @@ inline Vec shiftMetric(const SpacetimeProblem& problem, const Variables& vars) {
   for (const ContactVariables& contact : problem.contacts()) {
     const double weight = problem.characters()[static_cast<size_t>(contact.character)].weight;
     for (size_t i = 0; i < contact.times.size(); ++i) {
-      const auto block = vars.columns.find(x + contact.forceOffset + static_cast<int>(i) * contact.blockSize());
+      const auto block = vars.columns.find(x + contact.sampleOffset(static_cast<int>(i)));
       if (block == vars.columns.end()) continue;
       for (int column : block->second)
         if (column >= 0) metric[column] = 1 / (weight * weight);

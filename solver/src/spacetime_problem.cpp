@@ -473,7 +473,7 @@ void SpacetimeProblem::addForceInputs(InputMap& in, int j, std::pair<int, double
   const int row0 = in.newRows(cv.pointForceSize());
   const auto [i, a] = at;
   auto addSample = [&](int sample, double w) {
-    const int blk = in.block(x_.data() + cv.forceOffset + sample * size, size);
+    const int blk = in.block(x_.data() + cv.sampleOffset(sample), size);
     for (int r = 0; r < S.rows(); ++r)
       for (int d = 0; d < size; ++d)
         if (S(r, d) != 0) in.add(row0 + r, blk, d, scale * w * S(r, d));
@@ -488,7 +488,7 @@ void SpacetimeProblem::setSampleForces(int j, int sample, const std::vector<Eige
   for (int p = 0; p < static_cast<int>(ct.points.points.size()); ++p)
     for (int k = 0; k < ct.forceDims; ++k) f[p * ct.forceDims + k] = forces[static_cast<size_t>(p)][k];
   const Eigen::VectorXd u = ct.gather() * f;
-  for (int d = 0; d < ct.blockSize(); ++d) x_[ct.forceOffset + sample * ct.blockSize() + d] = u[d];
+  for (int d = 0; d < ct.blockSize(); ++d) x_[ct.sampleOffset(sample) + d] = u[d];
 }
 
 void SpacetimeProblem::addBlockInputs(InputMap& in, int offset, int size, double scale) {
@@ -826,8 +826,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
         std::vector<std::pair<int, double>> zero;
         for (int d = 0; d < ct.blockSize(); ++d) zero.emplace_back(d, 0.0);
         // On the sample's own variables: the split's rows would repeat Fx = 0.
-        addBlockInputs(in, ct.forceOffset + (static_cast<int>(ct.times.size()) - 1) * ct.blockSize(), ct.blockSize(),
-                       1.0 / cv.weight);
+        addBlockInputs(in, ct.sampleOffset(static_cast<int>(ct.times.size()) - 1), ct.blockSize(), 1.0 / cv.weight);
         addResidual(std::make_shared<TargetKernel>(ct.blockSize(), zero, at(label + " lift-off", time)), in);
         continue;
       }
@@ -1218,8 +1217,8 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
   const auto [i, a] = ct.interpolation(t);
   const size_t i1 = std::min<size_t>(i + 1, ct.times.size() - 1);
   const int size = ct.blockSize();
-  const Eigen::VectorXd u = (1 - a) * Eigen::Map<const Eigen::VectorXd>(x_.data() + ct.forceOffset + i * size, size) +
-                            a * Eigen::Map<const Eigen::VectorXd>(x_.data() + ct.forceOffset + i1 * size, size);
+  const Eigen::VectorXd u = (1 - a) * Eigen::Map<const Eigen::VectorXd>(x_.data() + ct.sampleOffset(i), size) +
+                            a * Eigen::Map<const Eigen::VectorXd>(x_.data() + ct.sampleOffset(static_cast<int>(i1)), size);
   const Eigen::VectorXd f = ct.split() * u;
   for (int p = 0; p < points; ++p)
     for (int k = 0; k < ct.forceDims; ++k) out[p][k] = f[p * ct.forceDims + k];

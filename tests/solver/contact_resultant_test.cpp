@@ -73,7 +73,7 @@ TEST(ContactResultant, TheConeIsTheResultantsOfTheConesOfThePoints) {
   int inside = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const Eigen::Vector3d u(2 * weight * any(rng), weight * (0.2 + unit(rng)), weight * any(rng));
-    for (int d = 0; d < 3; ++d) problem->variables()[ct.forceOffset + sample * 3 + d] = u[d];
+    for (int d = 0; d < 3; ++d) problem->variables()[ct.sampleOffset(sample) + d] = u[d];
     const Eigen::VectorXd split = ct.split() * u;
     cone.evaluate(split.data(), rows);
     const bool inCone = std::max({rows[0], rows[1], rows[2], rows[3]}) <= 0;

@@ -218,9 +218,8 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
       // both (every step is a solve, and the active set moves with the landing).
       EXPECT_GT(w.newtonSolves, 0);
       EXPECT_LT(w.newtonSolves, w.newtonSteps);
-      Scene moved = r.warm->scene();
       std::string error;
-      auto leastSquares = SpacetimeProblem::build(moved, &error);
+      auto leastSquares = SpacetimeProblem::build(r.warm->scene(), &error);
       ASSERT_TRUE(leastSquares) << error;
       ASSERT_TRUE(leastSquares->restore(before.problem->state()));
       SolverOptions lmOnly = options;

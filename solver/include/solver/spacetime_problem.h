@@ -184,7 +184,7 @@ struct ContactVariables {
   double start = 0, end = 0, friction = 1;
   std::vector<double> times;  // sample times in [start, end]
   int forceDims = 3;
-  int forceOffset = 0;   // sample i at + i * blockSize()
+  int forceOffset = 0;   // sample i at sampleOffset(i)
   int anchorOffset = 0;  // 2 values (x, z) per point
   // A contact that begins after the clip's start on a floating character touches down with an
   // impact: the root's velocity jumps at `start` (its Hermite data has two breakpoints there)
@@ -205,6 +205,7 @@ struct ContactVariables {
   bool resultant = false;
   int pointForceSize() const { return forceDims * static_cast<int>(points.points.size()); }
   int blockSize() const { return resultant ? 3 : pointForceSize(); }
+  int sampleOffset(int sample) const { return forceOffset + sample * blockSize(); }  // into the variables
   // The points' forces of one sample from its variables: f = split() u (pointForceSize x
   // blockSize), and the variables whose split has the same resultant as f: u = gather() f.
   Eigen::MatrixXd split() const;
