@@ -252,6 +252,8 @@ class ReducedSystem {
     }
   }
   double shift() const { return shift_; }
+  double largestDiagonal() const { return maxDiagonal_; }
+  void resetShift() { shift_ = 0; }
   // The shift's metric: the program's, or the identity.
   const Vec& metric() const { return metric_; }
 
@@ -298,6 +300,95 @@ class ReducedSystem {
   double maxDiagonal_ = 0, shift_ = 0;
 };
 
+// The weight of a guessed active row, relative to 1 + H's largest diagonal: large enough that
+// each Newton step below shrinks the held rows' residual by about 1e-5, small enough that the
+// factorisation keeps the inertia it should (at 1e8 the 3D lamp's least-squares programs, H's
+// diagonal up to 1e5, lost it to rounding).
+constexpr double kGuessWeight = 1e5;
+// Newton steps on one factorisation: the first solves the program with the held rows as
+// weighted penalties, the next remove what the weight and the rounding leave.
+constexpr int kGuessSolves = 6;
+// Factorisations: a guess that misses is corrected as a primal-dual active set method corrects
+// its sets (Hintermueller, Ito & Kunisch 2002): held rows that pull are released, rows the point
+// crosses are held. Where a contact force vanishes its cone's rows are all active and their
+// multipliers not unique, and the first split of them can pull on one row (the jump's last
+// programs: -29 on one of 11 held rows); releasing it gives the solution on the next try.
+constexpr int kGuessAttempts = 3;
+// A guess that needs more changes than this, or more than the last correction made, is far
+// from the solution's active set: the corrections then swing (on the 3D lamp's steps, hundreds
+// of rows each way), and the interior point is cheaper than more factorisations.
+constexpr int kGuessMaxChanges = 8;
+
+// The program with the guessed rows held as equalities (see the header): Newton steps on its
+// KKT conditions H x + g + A^T y + C_a^T z = 0, A x = b, C_a x = d_a, each from the residuals
+// at the current point, with the held rows' multipliers eliminated as an interior point's are
+// (dz = w (C_a dx + C_a x - d_a), with a large weight w, as an active row's z / s near its end).
+// K is then the interior point's, with the held rows weighted w and the others 0. True, with
+// the result filled in, if the point is a KKT point of the whole program to the tolerance, by
+// the interior point's measure.
+bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& options, ReducedSystem& system,
+                  double dualScale, double primalScale, QpResult* out) {
+  const SpRow& A = qp.equalities;
+  const SpRow& C = qp.inequalities;
+  const int n = static_cast<int>(qp.gradient.size()), me = static_cast<int>(A.rows()), mi = static_cast<int>(C.rows());
+  const double weight = kGuessWeight * (1 + system.largestDiagonal());
+  std::vector<char> guess = options.activeGuess;
+  int lastChanges = std::numeric_limits<int>::max();
+  for (int attempt = 0; attempt < kGuessAttempts; ++attempt) {
+    Vec held = Vec::Zero(mi);
+    for (int i = 0; i < mi; ++i) held[i] = guess[static_cast<size_t>(i)] ? 1.0 : 0.0;
+    const Vec w = weight * held;
+    // H is made convex on the held rows' tangent space as the interior point makes it on its
+    // iterates' (the same shift rule; the jump's exact-Hessian programs need one near its optimum).
+    if (!system.factorise(w, !options.convex)) return false;
+    Vec x = Vec::Zero(n), y = Vec::Zero(me), z = Vec::Zero(mi), rhs(n + me), rd, excess;
+    double error = std::numeric_limits<double>::infinity(), primal = 0, mu = 0, heldError = 0;
+    for (int k = 0;; ++k) {
+      rd = H * x + qp.gradient + A.transpose() * y + C.transpose() * z;
+      if (system.shift() > 0) rd += system.shift() * system.metric().cwiseProduct(x);
+      const Vec re = A * x - qp.equalityTargets;
+      excess = C * x - qp.inequalityBounds;
+      const Vec gap = held.cwiseProduct(excess);
+      primal = std::max(infNorm(re), infNorm(excess.cwiseMax(0.0)));
+      mu = mi ? (-excess).cwiseMax(0.0).dot(z) / mi : 0.0;
+      // The program with the held rows as equalities, and over all rows: the held rows at their
+      // bound (|gap|), the others inside it (excess <= 0).
+      heldError = std::max({infNorm(rd) / dualScale, std::max(infNorm(re), infNorm(gap)) / primalScale});
+      error = std::max({heldError, primal / primalScale, mu});
+      if (heldError <= 1e-2 * options.tolerance || k == kGuessSolves || !std::isfinite(error)) break;
+      rhs.head(n) = -rd - C.transpose() * Vec(w.cwiseProduct(gap));
+      rhs.tail(me) = -re;
+      const Vec step = system.solve(rhs);
+      x += step.head(n);
+      y += step.tail(me);
+      z += w.cwiseProduct(C * step.head(n) + gap);
+    }
+    if (!(heldError <= options.tolerance)) return false;  // the held rows' program itself not solved
+    const double pulls = -options.tolerance * dualScale, crosses = options.tolerance * primalScale;
+    if (error <= options.tolerance && (mi == 0 || z.minCoeff() >= pulls)) {
+      out->converged = out->fromGuess = true;
+      out->x = x, out->y = y, out->z = z.cwiseMax(0.0);
+      out->active = guess;
+      out->dualResidual = infNorm(rd);
+      out->primalResidual = primal;
+      out->complementarity = mu;
+      out->shift = system.shift();
+      out->reason = "KKT conditions met on the guessed active rows";
+      return true;
+    }
+    int changes = 0;
+    for (int i = 0; i < mi; ++i) {
+      char& g = guess[static_cast<size_t>(i)];
+      const char next = g ? z[i] >= pulls : excess[i] > crosses;
+      changes += next != g;
+      g = next;
+    }
+    if (changes > kGuessMaxChanges || changes >= lastChanges) return false;
+    lastChanges = changes;
+  }
+  return false;
+}
+
 }  // namespace
 
 QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& options, QpWorkspace* workspace) {
@@ -330,6 +421,10 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
     ws.pattern_->signature = std::move(signature);
   }
   ReducedSystem system(qp, options, *ws.pattern_);
+  if (options.activeGuess.size() == static_cast<size_t>(mi) &&
+      solveOnGuess(qp, H, options, system, dualScale, primalScale, &result))
+    return result;
+  system.resetShift();  // the interior point finds its own
   Vec x = Vec::Zero(n), y = Vec::Zero(me), z = Vec::Ones(mi), s = Vec::Ones(mi);
 
   // One Newton step of the perturbed KKT conditions with complementarity target rc (s o z - rc
@@ -378,7 +473,7 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   // iterations can lose what the earlier ones reached (the pivots then no longer show the
   // inertia they should, and a shift would change the program).
   double bestError = std::numeric_limits<double>::infinity();
-  Vec bestX = x, bestY = y, bestZ = z;
+  Vec bestX = x, bestY = y, bestZ = z, bestS = s;
   QpResult best;
   std::string stop;
   for (int it = 0;; ++it) {
@@ -396,7 +491,7 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
     }
     if (error < bestError) {
       bestError = error;
-      bestX = x, bestY = y, bestZ = z;
+      bestX = x, bestY = y, bestZ = z, bestS = s;
       best = result;
     }
     if (error <= options.tolerance) break;
@@ -438,6 +533,8 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   result.x = x;
   result.y = y;
   result.z = z;
+  result.active.resize(static_cast<size_t>(mi));
+  for (int i = 0; i < mi; ++i) result.active[static_cast<size_t>(i)] = z[i] > bestS[i];
   result.shift = system.shift();
   return result;
 }

@@ -145,6 +145,15 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   };
   auto polish = [&] { return raw::polishInto(problem, options, threads, deadline, cancel, &summary); };
 
+  // The rows active in the last program solved (per row of the problem): the next exact-Hessian
+  // program's guess (QpOptions::activeGuess). Near the solution the active set stops changing
+  // and a program is then one to three factorisations instead of ~15 interior-point iterations;
+  // its inactive rows' multipliers are then exactly zero (an interior point leaves each ~mu/s),
+  // so fewer rows stay held by their multiplier. The hurdle converges in 25 steps, 1.2 s, instead
+  // of 51, 2.1 s; the ladder's 0.3 m rung by its own steps; the jump in its 14 steps. The far
+  // programs (Gauss-Newton) get no guess: between them the active set changes by hundreds of
+  // rows (the 3D lamp), and a guess only costs its factorisations.
+  std::vector<char> wasActive;
   std::vector<double> feasibleKkt;  // the stationarity of the feasible steps in a row
   bool exactHessian = false;  // from the first step cut to kCreepingStep or less on
   int creepingSteps = 0;      // in a row
@@ -300,7 +309,14 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       program.inequalityBounds.head(mh) = -gh;
       program.shiftMetric = Vec::Ones(N);
       program.shiftMetric.head(n) = metric;
+      programOptions.activeGuess.clear();
+      if (!gaussNewton && !wasActive.empty()) {
+        for (int row : heldRows) programOptions.activeGuess.push_back(wasActive[static_cast<size_t>(row)]);
+        programOptions.activeGuess.resize(static_cast<size_t>(mh + 2 * pe + ke), 1);  // the slacks at zero
+      }
       qp = solveQuadraticProgram(program, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
+      wasActive.assign(static_cast<size_t>(rowCount), 0);
+      for (size_t i = 0; i < heldRows.size() && i < qp.active.size(); ++i) wasActive[static_cast<size_t>(heldRows[i])] = qp.active[i];
       if (hard) {
         const double largest = std::max(qp.y.lpNorm<Eigen::Infinity>(), qp.z.size() ? qp.z.lpNorm<Eigen::Infinity>() : 0.0);
         if (qp.converged && largest > nu && (merit.violation < kGaussNewtonAbove || largest <= kHardMultiplierCap))
@@ -313,7 +329,12 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       }
       elasticSum = hard ? 0.0 : qp.x.tail(2 * pe + ke).sum();
       // Rows outside the program the step crosses join it, and it is solved again.
-      if (raw::holdCrossedRows(g + Cfull * qp.x.head(n), &held)) continue;
+      const Vec linear = g + Cfull * qp.x.head(n);
+      if (raw::holdCrossedRows(linear, &held)) {
+        for (int i : held)  // a crossed row is guessed active in the next round
+          if (linear[i] > 1e-9) wasActive[static_cast<size_t>(inequality[static_cast<size_t>(i)])] = 1;
+        continue;
+      }
       // Steering: the elastic program keeps most of the violation (the penalty is too low for
       // the constraints to win against the objective): raise the penalty and solve again.
       const bool stalled = merit.violation > options.tolerance && merit.violation > 0.99 * lastViolation &&
@@ -358,14 +379,17 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       Vec corrected = d;
       RawRows at = std::move(trial);
       QuadraticProgram correction = program;  // only its targets change between corrections
+      QpOptions correctionOptions = programOptions;
+      correctionOptions.activeGuess = qp.active;
       for (int k = 0; k < (gaussNewton ? 1 : kMaxCorrections) && !accepted; ++k) {
         correction.equalityTargets = -(raw::selectValues(at.values, equality) - A * corrected);
         correction.inequalityBounds.head(static_cast<Eigen::Index>(heldRows.size())) =
             -(raw::selectValues(at.values, heldRows) - C * corrected);
         const Clock::time_point q0 = Clock::now();
-        const QpResult soc = solveQuadraticProgram(correction, programOptions, hard ? &hardWorkspace : &elasticWorkspace);
+        const QpResult soc = solveQuadraticProgram(correction, correctionOptions, hard ? &hardWorkspace : &elasticWorkspace);
         summary.qpSeconds += secondsSince(q0);
         if (!soc.converged) break;
+        correctionOptions.activeGuess = soc.active;
         corrected = soc.x.head(n);
         RawRows correctedRows;
         vars.plus(x0, corrected);

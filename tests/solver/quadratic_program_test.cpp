@@ -2,7 +2,8 @@
 // projection onto the probability simplex (the sort-and-threshold algorithm of Duchi et al.,
 // ICML 2008) and, for small random programs, the minimum over every choice of active
 // inequalities of the equality-constrained program's solution (a dense KKT solve each),
-// keeping the feasible ones whose multipliers push. Also: a concave H gets the inertia
+// keeping the feasible ones whose multipliers push; the same minimiser from a guess of the
+// active rows, right (no interior-point iterations) or wrong. Also: a concave H gets the inertia
 // correction, redundant equality rows still solve, and a program with no feasible point ends
 // not converged with a reason rather than a wrong answer.
 #include <gtest/gtest.h>
@@ -113,27 +114,34 @@ Vec enumeratedMinimiser(const Mat& H, const Vec& g, const Mat& A, const Vec& b, 
   return bestX;
 }
 
-TEST(QuadraticProgram, MatchesEnumerationOfActiveSetsOnRandomPrograms) {
-  std::mt19937 rng(11);
+// A random convex program with a feasible point strictly inside every inequality.
+struct DenseProgram {
+  Mat H, A, C;
+  Vec g, b, d;
+};
+DenseProgram randomProgram(std::mt19937& rng, int n, int me, int mi) {
   std::normal_distribution<double> normal(0, 1);
   std::uniform_real_distribution<double> uniform(0, 1);
-  auto random = [&](int r, int c) {
-    Mat M(r, c);
-    for (int i = 0; i < r; ++i)
-      for (int j = 0; j < c; ++j) M(i, j) = normal(rng);
-    return M;
-  };
+  auto random = [&](int r, int c) { return Mat(Mat::NullaryExpr(r, c, [&] { return normal(rng); })); };
+  DenseProgram p;
+  const Mat M = random(n, n);
+  p.H = M.transpose() * M + 0.05 * Mat::Identity(n, n);
+  p.g = 3 * random(n, 1);
+  p.A = random(me, n);
+  p.C = random(mi, n);
+  const Vec feasible = random(n, 1);
+  p.b = p.A * feasible;
+  p.d = p.C * feasible;
+  for (int i = 0; i < mi; ++i) p.d[i] += uniform(rng);
+  return p;
+}
+
+TEST(QuadraticProgram, MatchesEnumerationOfActiveSetsOnRandomPrograms) {
+  std::mt19937 rng(11);
   int withActiveRows = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    const int n = 5, me = trial % 3, mi = 8;
-    const Mat M = random(n, n);
-    const Mat H = M.transpose() * M + 0.05 * Mat::Identity(n, n);
-    const Vec g = 3 * random(n, 1);
-    const Mat A = random(me, n), C = random(mi, n);
-    const Vec feasible = random(n, 1);
-    const Vec b = A * feasible;
-    Vec d = C * feasible;
-    for (int i = 0; i < mi; ++i) d[i] += uniform(rng);
+    const int n = 5, mi = 8;
+    const auto [H, A, C, g, b, d] = randomProgram(rng, n, trial % 3, mi);
     const Vec truth = enumeratedMinimiser(H, g, A, b, C, d);
     ASSERT_EQ(truth.size(), n) << "trial " << trial;
     const QpResult r = solveQuadraticProgram(program(H, g, A, b, C, d));
@@ -143,6 +151,57 @@ TEST(QuadraticProgram, MatchesEnumerationOfActiveSetsOnRandomPrograms) {
     if (((C * truth - d).array() > -1e-9).any()) ++withActiveRows;
   }
   EXPECT_GT(withActiveRows, 20);
+}
+
+TEST(QuadraticProgram, TheActiveRowsGuessedRightSolveInOneFactorisationAndAWrongGuessIsRejected) {
+  // Random convex programs with active rows, each solved three ways: from scratch, with the
+  // active rows of the enumerated minimiser as the guess (taken, no iterations, the same point),
+  // and with a guess that holds an inactive row or drops an active one (not taken: the interior
+  // point's answer, still the minimiser).
+  std::mt19937 rng(23);
+  int taken = 0, rejected = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 6, mi = 9;
+    const auto [H, A, C, g, b, d] = randomProgram(rng, n, trial % 3, mi);
+    const Vec truth = enumeratedMinimiser(H, g, A, b, C, d);
+    ASSERT_EQ(truth.size(), n) << "trial " << trial;
+    const QuadraticProgram qp = program(H, g, A, b, C, d);
+    QpOptions options;
+    options.activeGuess.assign(mi, 0);
+    int activeRows = 0, inactiveRow = -1;
+    for (int i = 0; i < mi; ++i)
+      if (C.row(i).dot(truth) - d[i] > -1e-9) {
+        options.activeGuess[static_cast<size_t>(i)] = 1;
+        ++activeRows;
+      } else {
+        inactiveRow = i;
+      }
+    const QpResult right = solveQuadraticProgram(qp, options);
+    ASSERT_TRUE(right.converged) << "trial " << trial << ": " << right.reason;
+    EXPECT_TRUE(right.fromGuess) << "trial " << trial << ": " << right.reason;
+    EXPECT_EQ(right.iterations, 0);
+    EXPECT_LT((right.x - truth).lpNorm<Eigen::Infinity>(), 1e-7) << "trial " << trial;
+    EXPECT_LE((C * right.x - d).maxCoeff(), 1e-8);
+    EXPECT_GE(right.z.minCoeff(), 0.0);
+    taken += right.fromGuess;
+    if (activeRows == 0 || inactiveRow < 0) continue;
+    // Wrong both ways: an inactive row held (its multiplier would pull) and the first active
+    // row dropped (its bound would be crossed), unless the minimiser does not need it.
+    std::vector<char> wrong = options.activeGuess;
+    wrong[static_cast<size_t>(inactiveRow)] = 1;
+    for (int i = 0; i < mi; ++i)
+      if (wrong[static_cast<size_t>(i)] && i != inactiveRow) {
+        wrong[static_cast<size_t>(i)] = 0;
+        break;
+      }
+    options.activeGuess = wrong;
+    const QpResult fallback = solveQuadraticProgram(qp, options);
+    ASSERT_TRUE(fallback.converged) << "trial " << trial << ": " << fallback.reason;
+    EXPECT_LT((fallback.x - truth).lpNorm<Eigen::Infinity>(), 1e-6) << "trial " << trial;
+    rejected += !fallback.fromGuess;
+  }
+  EXPECT_EQ(taken, 40);
+  EXPECT_GT(rejected, 20);
 }
 
 TEST(QuadraticProgram, AWorkspaceSharedByProgramsWithChangingRowsGivesEachItsOwnSolution) {

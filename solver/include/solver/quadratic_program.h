@@ -19,11 +19,22 @@
 // than |A| negative pivots, Sylvester's law of inertia) a multiple of a diagonal metric (the
 // identity unless the program gives one) is added to H for the rest of the solve and reported,
 // as the inertia correction of Waechter & Biegler (2006, section 3.1) does for a Newton step.
+//
+// A guess of the active rows (the previous program's, in an SQP near its solution) is tried
+// first: the program with those rows held as equalities is one factorisation of the same
+// system (the held rows weighted heavily, as an interior point weighs them at its end, the
+// others not at all), and its point is returned when it is a KKT point of the whole program to
+// the tolerance - the other rows' bounds hold and the held rows push. A guess a few rows off
+// is corrected as a primal-dual active set method corrects it (up to three factorisations);
+// otherwise the interior point solves from scratch. A convex program has one minimiser, which
+// both paths return; where H needs the inertia shift, the guess's shift is the one that makes H
+// convex on the held rows' tangent space, which can be smaller than the interior point's.
 #pragma once
 
 #include <Eigen/SparseCore>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace spacetime {
 
@@ -52,6 +63,8 @@ struct QpOptions {
   // Regularisation of the two diagonal blocks: keeps the system quasi-definite with redundant
   // equality rows (contacts whose rows repeat each other) and a singular H.
   double primalRegularisation = 1e-10, dualRegularisation = 1e-9;
+  // Rows guessed active (one entry per inequality row, nonzero = active); empty: no guess.
+  std::vector<char> activeGuess;
 };
 
 struct QpResult {
@@ -60,6 +73,8 @@ struct QpResult {
   int iterations = 0;
   double shift = 0;  // multiple of the shift metric added to H (0 when H was convex enough)
   double primalResidual = 0, dualResidual = 0, complementarity = 0;  // at x, unscaled, inf-norms
+  std::vector<char> active;  // per inequality row: at its bound (its multiplier above its slack)
+  bool fromGuess = false;    // the active guess (or its correction) was the solution: no iterations
   std::string reason;
 };
 
