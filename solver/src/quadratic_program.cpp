@@ -342,6 +342,16 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
     // iterates' (the same shift rule; the jump's exact-Hessian programs need one near its optimum).
     if (!system.factorise(w, !options.convex)) return false;
     Vec x = Vec::Zero(n), y = Vec::Zero(me), z = Vec::Zero(mi), rhs(n + me), rd, excess;
+    // A held row that pulls or another row the point crosses, by `margin` times the tolerance.
+    auto missed = [&](int i, double margin) {
+      return held[i] != 0 ? z[i] < -margin * options.tolerance * dualScale
+                          : excess[i] > margin * options.tolerance * primalScale;
+    };
+    auto misses = [&](double margin) {
+      int count = 0;
+      for (int i = 0; i < mi; ++i) count += missed(i, margin);
+      return count;
+    };
     double error = std::numeric_limits<double>::infinity(), primal = 0, mu = 0, heldError = 0;
     for (int k = 0;; ++k) {
       rd = H * x + qp.gradient + A.transpose() * y + C.transpose() * z;
@@ -356,6 +366,9 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
       heldError = std::max({infNorm(rd) / dualScale, std::max(infNorm(re), infNorm(gap)) / primalScale});
       error = std::max({heldError, primal / primalScale, mu});
       if (heldError <= 1e-2 * options.tolerance || k == kGuessSolves || !std::isfinite(error)) break;
+      // The first solve is accurate to about 1 / weight: a guess it already shows far off is
+      // not refined.
+      if (k == 1 && misses(1e3) > kGuessMaxChanges) return false;
       rhs.head(n) = -rd - C.transpose() * Vec(w.cwiseProduct(gap));
       rhs.tail(me) = -re;
       const Vec step = system.solve(rhs);
@@ -364,8 +377,7 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
       z += w.cwiseProduct(C * step.head(n) + gap);
     }
     if (!(heldError <= options.tolerance)) return false;  // the held rows' program itself not solved
-    const double pulls = -options.tolerance * dualScale, crosses = options.tolerance * primalScale;
-    if (error <= options.tolerance && (mi == 0 || z.minCoeff() >= pulls)) {
+    if (error <= options.tolerance && misses(1) == 0) {
       out->converged = out->fromGuess = true;
       out->x = x, out->y = y, out->z = z.cwiseMax(0.0);
       out->active = guess;
@@ -376,14 +388,10 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
       out->reason = "KKT conditions met on the guessed active rows";
       return true;
     }
-    int changes = 0;
-    for (int i = 0; i < mi; ++i) {
-      char& g = guess[static_cast<size_t>(i)];
-      const char next = g ? z[i] >= pulls : excess[i] > crosses;
-      changes += next != g;
-      g = next;
-    }
+    const int changes = misses(1);
     if (changes > kGuessMaxChanges || changes >= lastChanges) return false;
+    for (int i = 0; i < mi; ++i)
+      if (missed(i, 1)) guess[static_cast<size_t>(i)] = !guess[static_cast<size_t>(i)];
     lastChanges = changes;
   }
   return false;
