@@ -98,7 +98,9 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   const Clock::time_point start = Clock::now();
   SolverOptions al = options;
   al.method = SolverMethod::AugmentedLagrangian;
-  if (!options.validate().empty() || options.warmStart || !problem.freeEnds().empty()) {
+  // A warm start (an edit of a solved scene) steps from the earlier solve's multipliers.
+  const bool warm = options.warmStart && problem.augmentedLagrangian().rho > 0;
+  if (!options.validate().empty() || !problem.freeEnds().empty()) {
     SolverSummary s = solveSpacetime(problem, al, callback, cancel);
     s.method = SolverMethod::Sqp;
     return s;
@@ -156,6 +158,18 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   std::vector<char> wasActive;
   std::vector<double> feasibleKkt;  // the stationarity of the feasible steps in a row
   bool exactHessian = false;  // from the first step cut to kCreepingStep or less on
+  if (warm) {
+    // Next to the earlier optimum the exact Hessian's programs with its multipliers and active
+    // set (the first program's guess) take Newton's steps.
+    exactHessian = true;
+    wasActive.assign(static_cast<size_t>(rowCount), 0);
+    for (int r = 0; r < rowCount; ++r) {
+      if (evaluator.kind(r) == RowKind::Objective) continue;
+      const double lambda = state.lambda[evaluator.multiplier(r)];
+      y[r] = evaluator.kind(r) == RowKind::Equality ? lambda : std::max(0.0, lambda);
+      wasActive[static_cast<size_t>(r)] = evaluator.kind(r) == RowKind::Inequality && lambda > 0;
+    }
+  }
   int creepingSteps = 0;      // in a row
   RawRows rows;
   if (!evaluator.evaluate(&rows, true)) why = "the rows at the starting point are not finite";
@@ -359,7 +373,8 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     // Line search on the l1 merit; its directional derivative along d is grad.d - nu (l1 - the
     // slacks' sum) (N&W eq. 18.29). A full step the merit rejects first tries second-order
     // corrections: the same program with the rows' values at the trial point less their linear
-    // change (N&W 18.3), repeated from each corrected point (kMaxCorrections).
+    // change (N&W 18.3), repeated from each corrected point (kMaxCorrections). Trial points are
+    // evaluated without Jacobians (0.6 ms instead of 4.5 on the jump), the accepted one with them.
     phase = Clock::now();
     const double phi0 = merit.f + nu * merit.l1;
     const double slope = std::min(0.0, grad.dot(d) - nu * (merit.l1 - elasticSum));
@@ -369,7 +384,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     double alpha = 1;
     for (int ls = 0; ls < 30 && !accepted; ++ls, alpha *= 0.5) {
       vars.plus(x0, alpha * d);
-      if (!evaluator.evaluate(&trial, true)) continue;
+      if (!evaluator.evaluate(&trial, false)) continue;
       Merit m = meritOf(trial.values);
       if (m.f + nu * m.l1 <= phi0 + kArmijo * alpha * slope) {
         accepted = true;
@@ -393,7 +408,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
         corrected = soc.x.head(n);
         RawRows correctedRows;
         vars.plus(x0, corrected);
-        if (!evaluator.evaluate(&correctedRows, true)) break;
+        if (!evaluator.evaluate(&correctedRows, false)) break;
         const Merit mc = meritOf(correctedRows.values);
         if (mc.f + nu * mc.l1 <= phi0 + kArmijo * slope) {
           trial = std::move(correctedRows);
@@ -407,6 +422,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       }
       if (accepted) break;
     }
+    if (accepted) accepted = evaluator.evaluate(&trial, true);  // at the accepted point
     summary.lineSearchSeconds += secondsSince(phase);
     if (!accepted) {
       vars.load(x0);

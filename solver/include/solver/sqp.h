@@ -15,9 +15,10 @@
 //
 // Where the steps fail (a line search finds no decrease, the step budget ends) the method
 // restores the starting point and the augmented Lagrangian solves from there, so `sqp` solves
-// whatever `al` solves; the summary says so. Warm starts (an edit in the editor, a refined
-// transcription) and free contact ends go to the augmented Lagrangian's path directly: its
-// warm start already begins with the polish's Newton steps.
+// whatever `al` solves; the summary says so. A warm start (an edit in the editor, a refined
+// transcription) steps with the exact Hessian from the stored multipliers, the first program
+// guessing their active rows: the jump's end pose moved 2 or 10 cm lands on the cold solve's
+// optimum in 3 or 4 steps. Free contact ends go to the augmented Lagrangian's path directly.
 #pragma once
 
 #include <atomic>
