@@ -167,13 +167,13 @@ Solved solvedShipped(const std::string& name, bool bodiesAboveGround = true) {
 }
 
 // `original` with its end pose's base_x moved by `move`, solved warm from `before` (its solution
-// and multipliers) and cold; the warm problem is kept for further checks.
+// and multipliers) and, with `solveCold`, cold; the warm problem is kept for further checks.
 struct WarmAndCold {
   std::unique_ptr<SpacetimeProblem> warm;
   SolverSummary w, c;
 };
 WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimeProblem& before, double move,
-                                       const SolverOptions& options) {
+                                       const SolverOptions& options, bool solveCold = true) {
   Scene scene = original;
   for (TermSpec& t : scene.terms)
     if (t.id == "end_pose")
@@ -189,7 +189,7 @@ WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimePro
   SolverOptions warmOptions = options;
   warmOptions.warmStart = true;
   out.w = solveSpacetime(*out.warm, warmOptions);
-  out.c = solveSpacetime(*cold, options);
+  if (solveCold) out.c = solveSpacetime(*cold, options);
   return out;
 }
 
@@ -207,12 +207,13 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
   const SolverOptions& options = before.options;
   for (const double move : {0.02, 0.10}) {
     SCOPED_TRACE(move);
-    const WarmAndCold r = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options);
+    const bool small = move < 0.05;  // compared with the least-squares steps, not a cold solve
+    const WarmAndCold r = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options, !small);
     ASSERT_TRUE(r.warm);
     const SolverSummary &w = r.w, &c = r.c;
-    ASSERT_TRUE(w.converged && c.converged) << w.reason << " / " << c.reason;
+    ASSERT_TRUE(w.converged && (small || c.converged)) << w.reason << " / " << c.reason;
     EXPECT_TRUE(w.polished);
-    if (move < 0.05) {
+    if (small) {
       EXPECT_EQ(w.iterations, 0);
       // The polish's passes are KKT solves and changes of its active set; the small edit needs
       // both (every step is a solve, and the active set moves with the landing).
