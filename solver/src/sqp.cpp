@@ -151,7 +151,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   // program's guess (QpOptions::activeGuess). Near the solution the active set stops changing
   // and a program is then one to three factorisations instead of ~15 interior-point iterations;
   // its inactive rows' multipliers are then exactly zero (an interior point leaves each ~mu/s),
-  // so fewer rows stay held by their multiplier. The hurdle converges in 25 steps, 1.2 s, instead
+  // so fewer rows stay held by their multiplier. The hurdle converges in 25 steps, 1.1 s, instead
   // of 51, 2.1 s; the ladder's 0.3 m rung by its own steps; the jump in its 14 steps. The far
   // programs (Gauss-Newton) get no guess: between them the active set changes by hundreds of
   // rows (the 3D lamp), and a guess only costs its factorisations.
