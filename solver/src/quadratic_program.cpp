@@ -312,11 +312,13 @@ constexpr int kGuessSolves = 6;
 // its sets (Hintermueller, Ito & Kunisch 2002): held rows that pull are released, rows the point
 // crosses are held. Where a contact force vanishes its cone's rows are all active and their
 // multipliers not unique, and the first split of them can pull on one row (the jump's last
-// programs: -29 on one of 11 held rows); releasing it gives the solution on the next try.
+// programs: -29 on one of 11 held rows); releasing it gives the solution on the next try. The
+// jump's 2 cm warm edit's first program takes all three (one row missed, then one other).
 constexpr int kGuessAttempts = 3;
 // A guess that needs more changes than this, or more than the last correction made, is far
 // from the solution's active set: the corrections then swing (on the 3D lamp's steps, hundreds
-// of rows each way), and the interior point is cheaper than more factorisations.
+// of rows each way), and the interior point is cheaper than more factorisations. As many
+// changes as the last correction go on (the 2 cm edit: 53.7 ms instead of 81 when they stopped).
 constexpr int kGuessMaxChanges = 8;
 
 // The program with the guessed rows held as equalities (see the header): Newton steps on its
@@ -389,7 +391,7 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
       return true;
     }
     const int changes = misses(1);
-    if (changes > kGuessMaxChanges || changes >= lastChanges) return false;
+    if (changes > kGuessMaxChanges || changes > lastChanges) return false;
     for (int i = 0; i < mi; ++i)
       if (missed(i, 1)) guess[static_cast<size_t>(i)] = !guess[static_cast<size_t>(i)];
     lastChanges = changes;
