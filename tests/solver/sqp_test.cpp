@@ -100,7 +100,7 @@ TEST(Sqp, TheDoubledHurdleAndTheShortRungConvergeByTheirOwnSteps) {
 // The editor's drag with `sqp`: the jump solved, its end pose moved 2 and 10 cm further, and
 // re-solved warm from the solution and its multipliers (the earlier active set as the first
 // program's guess). Exact-Hessian steps land on the optimum the cold solve of the moved scene
-// finds (measured: 29.0709782 and 33.8112420, in 3 and 4 steps against 21 cold), without a
+// finds (measured: 29.0709782 and 33.8112420, in 2 and 4 steps against 21 cold), without a
 // least-squares iteration, and the motion is valid.
 TEST(Sqp, WarmEditsLandOnTheColdOptimumInAFewSteps) {
   Scene scene = testing::shippedScene("luxo_jump.json");

@@ -18,7 +18,7 @@
 // whatever `al` solves; the summary says so. A warm start (an edit in the editor, a refined
 // transcription) steps with the exact Hessian from the stored multipliers, the first program
 // guessing their active rows: the jump's end pose moved 2 or 10 cm lands on the cold solve's
-// optimum in 3 or 4 steps. Free contact ends go to the augmented Lagrangian's path directly.
+// optimum in 2 or 4 steps. Free contact ends go to the augmented Lagrangian's path directly.
 #pragma once
 
 #include <atomic>
