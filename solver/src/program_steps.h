@@ -33,6 +33,9 @@ inline void appendGaussNewton(const SpRow& Jr, Triplets* t) {
       if (e.row() >= e.col()) t->emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
 }
 
+// A linearised inequality above this is crossed by the step.
+constexpr double kCrossed = 1e-9;
+
 // The inequalities a step's program left out that its step crosses (linearised values
 // `linear`, one per inequality) join `held` (indices into the inequalities, kept sorted);
 // true if any did.
@@ -41,7 +44,7 @@ inline bool holdCrossedRows(const Vec& linear, std::vector<int>* held) {
   for (int i : *held) isHeld[static_cast<size_t>(i)] = 1;
   const size_t before = held->size();
   for (Eigen::Index i = 0; i < linear.size(); ++i)
-    if (!isHeld[static_cast<size_t>(i)] && linear[i] > 1e-9) held->push_back(static_cast<int>(i));
+    if (!isHeld[static_cast<size_t>(i)] && linear[i] > kCrossed) held->push_back(static_cast<int>(i));
   std::sort(held->begin(), held->end());
   return held->size() != before;
 }

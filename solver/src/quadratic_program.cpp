@@ -379,7 +379,8 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
       z += w.cwiseProduct(C * step.head(n) + gap);
     }
     if (!(heldError <= options.tolerance)) return false;  // the held rows' program itself not solved
-    if (error <= options.tolerance && misses(1) == 0) {
+    const int changes = misses(1);
+    if (error <= options.tolerance && changes == 0) {
       out->converged = out->fromGuess = true;
       out->x = x, out->y = y, out->z = z.cwiseMax(0.0);
       out->active = guess;
@@ -390,7 +391,6 @@ bool solveOnGuess(const QuadraticProgram& qp, const SpMat& H, const QpOptions& o
       out->reason = "KKT conditions met on the guessed active rows";
       return true;
     }
-    const int changes = misses(1);
     if (changes > kGuessMaxChanges || changes > lastChanges) return false;
     for (int i = 0; i < mi; ++i)
       if (missed(i, 1)) guess[static_cast<size_t>(i)] = !guess[static_cast<size_t>(i)];

@@ -346,7 +346,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       const Vec linear = g + Cfull * qp.x.head(n);
       if (raw::holdCrossedRows(linear, &held)) {
         for (int i : held)  // a crossed row is guessed active in the next round
-          if (linear[i] > 1e-9) wasActive[static_cast<size_t>(inequality[static_cast<size_t>(i)])] = 1;
+          if (linear[i] > raw::kCrossed) wasActive[static_cast<size_t>(inequality[static_cast<size_t>(i)])] = 1;
         continue;
       }
       // Steering: the elastic program keeps most of the violation (the penalty is too low for
