@@ -260,7 +260,7 @@ BodySpec readBody(const Reader& r, const json& b, const std::string& path, bool 
 
 // The transcription's size (SceneLimits): checked before anything grows with it.
 void checkSize(const Reader& r, const Scene& s) {
-  const double segments = (s.endTime - s.startTime) * s.transcription.controlPointsPerSecond;
+  const double segments = s.transcription.segments(s.startTime, s.endTime);
   char what[200];
   if (segments > SceneLimits::kMaxSegments) {
     std::snprintf(what, sizeof what,
@@ -514,7 +514,7 @@ Scene readScene(const Reader& r, const json& root) {
   }
   if (root.contains("transcription")) {
     const json& t = root["transcription"];
-    r.allowKeys(t, "transcription", {"controlPointsPerSecond", "samplesPerSegment", "legBubbles"});
+    r.allowKeys(t, "transcription", {"controlPointsPerSecond", "samplesPerSegment", "legBubbles", "knots"});
     if (t.contains("controlPointsPerSecond"))
       s.transcription.controlPointsPerSecond =
           r.positive(t["controlPointsPerSecond"], "transcription.controlPointsPerSecond");
@@ -523,6 +523,20 @@ Scene readScene(const Reader& r, const json& root) {
           r.integer(t["samplesPerSegment"], "transcription.samplesPerSegment", 1,
                     TranscriptionSpec::kMaxSamplesPerSegment);
     if (t.contains("legBubbles")) s.transcription.legBubbles = r.boolean(t["legBubbles"], "transcription.legBubbles");
+    if (t.contains("knots")) {
+      const json& k = t["knots"];
+      if (!k.is_array()) r.badValue("transcription.knots", k, "an array of increasing times inside the clip");
+      const double gap = TranscriptionSpec::kMinKnotSpacing;
+      for (size_t i = 0; i < k.size(); ++i) {
+        const std::string path = Reader::index("transcription.knots", i);
+        const double v = r.number(k[i], path);
+        const double after = s.transcription.knots.empty() ? s.startTime : s.transcription.knots.back();
+        if (!(v >= after + gap && v <= s.endTime - gap))
+          r.badValue(path, k[i], "a time at least 1e-4 s after " + std::string(i ? "the knot before it" : "time.start") +
+                                     " and before time.end");
+        s.transcription.knots.push_back(v);
+      }
+    }
   }
   if (root.contains("solver")) {
     const json& t = root["solver"];
@@ -826,6 +840,7 @@ std::string sceneToJson(const Scene& s) {
   root["transcription"] = {{"controlPointsPerSecond", s.transcription.controlPointsPerSecond},
                            {"samplesPerSegment", s.transcription.samplesPerSegment}};
   if (s.transcription.legBubbles) root["transcription"]["legBubbles"] = true;
+  if (!s.transcription.knots.empty()) root["transcription"]["knots"] = s.transcription.knots;
   root["solver"] = {{"method", s.solver.method},
                     {"maxOuterIterations", s.solver.maxOuterIterations},
                     {"maxInnerIterations", s.solver.maxInnerIterations},

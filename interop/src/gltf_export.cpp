@@ -135,7 +135,7 @@ std::vector<double> gltfKeyTimes(const SpacetimeProblem& problem, double rateHz)
     for (const DofGroup& g : c.groups) {
       if (g.hasBubbles()) grid.insert(grid.end(), g.breaks.begin(), g.breaks.end());
       else
-        for (int k = 0; k <= g.spline.segmentCount(); ++k) grid.push_back(g.spline.start() + k * g.spline.knotSpacing());
+        for (int k = 0; k <= g.spline.segmentCount(); ++k) grid.push_back(g.spline.knot(k));
     }
   std::sort(grid.begin(), grid.end());
   // Keys closer than a microsecond are one (float seconds in the file; an impact's repeated

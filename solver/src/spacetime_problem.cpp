@@ -889,8 +889,9 @@ void SpacetimeProblem::addImpactTerms(int j) {
   const std::vector<int> group = simultaneousImpacts(j);
   // Impulses are measured as the weight acting over one knot interval, and an impulsive joint
   // torque costs what the same torque impulse spread over one knot interval would cost in the
-  // effort integral (tau^2 h = (impulse / h)^2 h).
-  const double h = transcription_.motion.knotSpacing();
+  // effort integral (tau^2 h = (impulse / h)^2 h); on a refined, non-uniform transcription the
+  // mean interval.
+  const double h = transcription_.motion.meanKnotSpacing();
   const double impulseScale = 1.0 / (cv.weight * h);
   // One velocity jump for every contact touching down now: the first of them adds it.
   if (group.front() == j) {
@@ -1059,7 +1060,7 @@ void SpacetimeProblem::initialGuess() {
   // dofs are interpolated in "flight time", which stands still while a contact holds the
   // character, and the root's vertical translation follows the ballistic arc of each flight
   // phase: a guess that already respects the contact schedule and gravity.
-  const UniformBSpline& spline = transcription_.motion;
+  const CubicBSpline& spline = transcription_.motion;
   const double g = scene_.gravity.norm();
   for (size_t c = 0; c < characters_.size(); ++c) {
     const CharacterVariables& cv = characters_[c];
@@ -1077,9 +1078,7 @@ void SpacetimeProblem::initialGuess() {
     for (const TermSpec& t : scene_.terms)
       if (t.enabled && t.kind == TermKind::Keyframe && t.character == id)
         for (const auto& [dof, v] : t.values) keys[cv.model->dofIndex(dof)].emplace_back(t.time, v);
-    std::vector<double> times;
-    const int n = 20 * spline.segmentCount();
-    for (int i = 0; i <= n; ++i) times.push_back(spline.start() + (spline.end() - spline.start()) * i / n);
+    const std::vector<double> times = spline.sampleTimes(20);
     Eigen::MatrixXd values = Eigen::MatrixXd::Zero(times.size(), cv.dofs);
     for (int d = 0; d < cv.dofs; ++d) {
       const Body<double>& body = cv.model->bodies[cv.model->dofBody[d]];
@@ -1239,7 +1238,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
       if (previous.scene().terms[old.term].id == id) x_[e.offset] = std::clamp(old.end, e.lower, e.upper);
   }
   syncFreeEnds();
-  const UniformBSpline& spline = transcription_.motion;
+  const CubicBSpline& spline = transcription_.motion;
   const double t0 = std::max(spline.start(), previous.scene().startTime);
   const double t1 = std::min(spline.end(), previous.scene().endTime);
   auto clampTime = [&](double t) { return std::clamp(t, t0, t1); };
@@ -1257,9 +1256,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
       // Leg bubbles start at zero: the joints' B-splines are fitted to the whole previous motion.
       if (n == 0 || g.legBubbles) continue;
       if (!g.hermite) {
-        std::vector<double> times;
-        const int samples = 8 * spline.segmentCount();
-        for (int i = 0; i <= samples; ++i) times.push_back(spline.start() + (spline.end() - spline.start()) * i / samples);
+        const std::vector<double> times = spline.sampleTimes(8);
         Eigen::MatrixXd values(times.size(), n);
         for (size_t i = 0; i < times.size(); ++i) {
           const Eigen::VectorXd q = previous.jointState(pc, clampTime(times[i]), 0);

@@ -60,10 +60,19 @@ void gaussRadau(int n, std::vector<double>* nodes, std::vector<double>* weights)
 Transcription Transcription::fromScene(const Scene& scene) {
   Transcription tr;
   const double t0 = scene.startTime, t1 = scene.endTime;
-  tr.motion = UniformBSpline(t0, t1, segmentsFor(t0, t1, scene.transcription.controlPointsPerSecond));
+  // The refinement's knots where it split segments (those still inside the clip, should the clip
+  // have changed since), the scene's rate otherwise.
+  std::vector<double> knots = {t0};
+  for (double k : scene.transcription.knots)
+    if (k >= knots.back() + TranscriptionSpec::kMinKnotSpacing && k <= t1 - TranscriptionSpec::kMinKnotSpacing)
+      knots.push_back(k);
+  knots.push_back(t1);
+  tr.motion = scene.transcription.knots.empty()
+                  ? CubicBSpline(t0, t1, segmentsFor(t0, t1, scene.transcription.controlPointsPerSecond))
+                  : CubicBSpline(knots);
   // Breakpoints: the spline's knots and every contact edge inside the clip.
   for (int k = 0; k <= tr.motion.segmentCount(); ++k)
-    tr.breakpoints.push_back(t0 + k * tr.motion.knotSpacing());
+    tr.breakpoints.push_back(tr.motion.knot(k));
   for (const TermSpec& t : scene.terms)
     if (t.enabled && t.kind == TermKind::Contact)
       for (double e : {t.start, t.end})
@@ -137,7 +146,7 @@ Transcription Transcription::fromScene(const Scene& scene) {
   for (const TermSpec& t : scene.terms)
     if (t.enabled && t.kind == TermKind::Contact)
       for (int k = 1; k < tr.motion.segmentCount(); ++k) {
-        const double knot = t0 + k * tr.motion.knotSpacing();
+        const double knot = tr.motion.knot(k);
         if (knot > t.start + kTimeTolerance && knot < t.end - kTimeTolerance && !present(knot)) tr.samples.push_back(zeroWeight(knot, true));
       }
   std::sort(tr.samples.begin(), tr.samples.end(),
@@ -164,11 +173,26 @@ std::vector<Sample> Transcription::samplesIn(double t0, double t1, const std::st
 }
 
 std::vector<double> Transcription::denseGrid(int factor) const {
-  const int n = static_cast<int>(std::count_if(samples.begin(), samples.end(),
-                                               [](const Sample& s) { return !s.stance && s.except.empty(); })) * factor;
-  std::vector<double> grid(n + 1);
-  for (int i = 0; i <= n; ++i)
-    grid[i] = motion.start() + (motion.end() - motion.start()) * i / n;
+  auto counted = [](const Sample& s) { return !s.stance && s.except.empty(); };
+  if (motion.uniform()) {
+    const int n = static_cast<int>(std::count_if(samples.begin(), samples.end(), counted)) * factor;
+    std::vector<double> grid(n + 1);
+    for (int i = 0; i <= n; ++i)
+      grid[i] = motion.start() + (motion.end() - motion.start()) * i / n;
+    return grid;
+  }
+  // Non-uniform knots: each segment as finely as its own samples, so that a segment the
+  // refinement split is checked as densely as the uniform grid checks its finest rate.
+  std::vector<double> grid;
+  for (int k = 0; k < motion.segmentCount(); ++k) {
+    const double a = motion.knot(k), b = motion.knot(k + 1);
+    const int inside = static_cast<int>(std::count_if(samples.begin(), samples.end(), [&](const Sample& s) {
+      return counted(s) && s.time >= a - kTimeTolerance && s.time < b - kTimeTolerance;
+    }));
+    const int n = std::max(1, inside) * factor;
+    for (int i = 0; i < n; ++i) grid.push_back(a + (b - a) * i / n);
+  }
+  grid.push_back(motion.end());
   return grid;
 }
 

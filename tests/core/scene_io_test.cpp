@@ -52,7 +52,7 @@ TEST(SceneIo, FreeContactEndRoundTrips) {
 }
 
 // The solver method and the frame rate a scene asks for are saved and read back.
-TEST(SceneIo, SolverMethodFrameRateAndLegBubblesRoundTrip) {
+TEST(SceneIo, SolverMethodFrameRateLegBubblesAndKnotsRoundTrip) {
   const SceneLoadResult r = loadSceneFile(std::string(kScenes) + "/luxo_jump.json");
   ASSERT_TRUE(r.scene) << r.error;
   EXPECT_EQ(r.scene->solver.method, "al");  // the default
@@ -67,6 +67,13 @@ TEST(SceneIo, SolverMethodFrameRateAndLegBubblesRoundTrip) {
   EXPECT_EQ(again.scene->solver.method, "ipopt");
   EXPECT_EQ(again.scene->frameRate, 30);
   EXPECT_TRUE(again.scene->transcription.legBubbles);
+  EXPECT_TRUE(again.scene->transcription.knots.empty());  // uniform: none written
+  // The refinement's non-uniform knots (TranscriptionSpec::knots) round-trip exactly.
+  scene.transcription.knots = {0.1, 0.35, 0.4125, 0.475, 0.6 + 1e-13};
+  const SceneLoadResult knotted = parseScene(sceneToJson(scene), "roundtrip");
+  ASSERT_TRUE(knotted.scene) << knotted.error;
+  EXPECT_EQ(knotted.scene->transcription.knots, scene.transcription.knots);
+  scene.transcription.knots.clear();
   for (const char* method : SolverSpec::kMethods) {
     scene.solver.method = method;
     const SceneLoadResult each = parseScene(sceneToJson(scene), "roundtrip");
@@ -180,6 +187,10 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
       {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
+      {minimalWith(body, "[]", R"("transcription": {"knots": 0.5},)"), "transcription.knots': value 0.5"},
+      {minimalWith(body, "[]", R"("transcription": {"knots": [0.5, 0.4]},)"),
+       "transcription.knots[1]': value 0.4 is not allowed; expected a time at least 1e-4 s after the knot before it"},
+      {minimalWith(body, "[]", R"("transcription": {"knots": [1.0]},)"), "transcription.knots[0]': value 1"},
       {minimalWith(body, "[]", R"("solver": {"method": "sqp2"},)"), "solver.method': value \"sqp2\" is not allowed; expected \"al\", \"ipopt\", \"sqp\" or \"witkin-kass\""},
       // A number beyond a double (nlohmann's out_of_range, which used to abort).
       {minimalWith(R"({"id": "base", "mass": 1e999})"), "not valid JSON"},

@@ -2,6 +2,7 @@
 // transcription's use of them where a flight starts after a lift-off.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -141,6 +142,60 @@ TEST(Transcription, ATouchDownAtAnotherCharactersLiftOffKeepsGaussNodes) {
       nodes += smp.appliesTo(id) && smp.weight > 0 && smp.time >= 0.8 - 1e-12 && smp.time < 0.85 - 1e-12;
     EXPECT_EQ(nodes, id == "luxo2" ? s + 1 : s) << id;
   }
+}
+
+// The refinement's non-uniform knots (TranscriptionSpec::knots): luxo_jump with the two
+// segments around its lift-off at 0.4 s split. The split points are breakpoints, each interval
+// holds its s Gauss samples (s + 1 Radau ones from the lift-off) whose weights sum to its length,
+// and the dense grid is as much finer there as the samples are. Knots equal to the uniform ones
+// give the uniform problem: the same variables and the same initial guess.
+TEST(Transcription, SplitSegmentsGetTheirOwnSamplesAndDenseGrid) {
+  Scene scene = testing::shippedScene("luxo_jump.json");
+  const int s = scene.transcription.samplesPerSegment;
+  const int uniformSegments = 24;  // 1.2 s at 20 control points per second
+  for (int k = 1; k < uniformSegments; ++k) {
+    scene.transcription.knots.push_back(0.05 * k);
+    if (k == 7 || k == 8) scene.transcription.knots.push_back(0.05 * k + 0.025);
+  }
+  const Transcription tr = Transcription::fromScene(scene);
+  EXPECT_FALSE(tr.motion.uniform());
+  EXPECT_EQ(tr.motion.segmentCount(), uniformSegments + 2);
+  for (double split : {0.375, 0.425})
+    EXPECT_TRUE(std::any_of(tr.breakpoints.begin(), tr.breakpoints.end(), [&](double b) { return std::abs(b - split) < 1e-12; }))
+        << split;
+  for (size_t k = 0; k + 1 < tr.breakpoints.size(); ++k) {
+    const double a = tr.breakpoints[k], b = tr.breakpoints[k + 1];
+    int nodes = 0;
+    double weight = 0;
+    for (const Sample& smp : tr.samples)
+      if (smp.weight > 0 && smp.time >= a - 1e-12 && smp.time < b - 1e-12) {
+        ++nodes;
+        weight += smp.weight;
+      }
+    EXPECT_EQ(nodes, std::abs(a - 0.4) < 1e-12 ? s + 1 : s) << "interval from " << a;
+    EXPECT_NEAR(weight, b - a, 1e-12) << "interval from " << a;
+  }
+  const std::vector<double> dense = tr.denseGrid(kDenseGridFactor);
+  auto spacingAt = [&](double t) {
+    const auto it = std::upper_bound(dense.begin(), dense.end(), t);
+    return *it - *(it - 1);
+  };
+  EXPECT_NEAR(spacingAt(0.39), 0.025 / (s * kDenseGridFactor), 1e-12);  // a split segment
+  EXPECT_NEAR(spacingAt(0.61), 0.05 / (s * kDenseGridFactor), 1e-12);   // a whole one
+  EXPECT_DOUBLE_EQ(dense.front(), 0.0);
+  EXPECT_DOUBLE_EQ(dense.back(), 1.2);
+
+  Scene even = testing::shippedScene("luxo_jump.json");
+  for (int k = 1; k < uniformSegments; ++k) even.transcription.knots.push_back(0.05 * k);
+  std::string error;
+  const auto uniform = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
+  ASSERT_TRUE(uniform) << error;
+  const auto knotted = SpacetimeProblem::build(even, &error);
+  ASSERT_TRUE(knotted) << error;
+  EXPECT_FALSE(knotted->transcription().motion.uniform());
+  ASSERT_EQ(knotted->variables().size(), uniform->variables().size());
+  for (size_t i = 0; i < uniform->variables().size(); ++i)
+    EXPECT_NEAR(knotted->variables()[i], uniform->variables()[i], 1e-9 * (1 + std::abs(uniform->variables()[i]))) << i;
 }
 
 }  // namespace

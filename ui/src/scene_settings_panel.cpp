@@ -22,9 +22,15 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
   f.addText(tr("Name"), [](const Scene& s) { return s.name; }, [](Scene& s, const std::string& v) { s.name = v; });
   // The clip: its end stays after its start (the loader's rule), by at least kShortestClip.
   f.addDouble(tr("Clip start"), [](const Scene& s) { return s.startTime; },
-              [](Scene& s, double v) { s.startTime = std::min(v, s.endTime - kShortestClip); }, -1e3, 1e3, 0.1, 3, tr(" s"));
+              [](Scene& s, double v) {
+                s.startTime = std::min(v, s.endTime - kShortestClip);
+                s.transcription.knots.clear();  // the refinement's knots were the old clip's
+              }, -1e3, 1e3, 0.1, 3, tr(" s"));
   f.addDouble(tr("Clip end"), [](const Scene& s) { return s.endTime; },
-              [](Scene& s, double v) { s.endTime = std::max(v, s.startTime + kShortestClip); }, -1e3, 1e3, 0.1, 3, tr(" s"));
+              [](Scene& s, double v) {
+                s.endTime = std::max(v, s.startTime + kShortestClip);
+                s.transcription.knots.clear();
+              }, -1e3, 1e3, 0.1, 3, tr(" s"));
   f.addDouble(tr("Frame rate"), [](const Scene& s) { return s.frameRate; },
               [](Scene& s, double v) { s.frameRate = v; }, 1, Scene::kMaxFrameRate, 1, 2, tr(" fps"));
   f.addVector(tr("Gravity"), [](const Scene& s) { return s.gravity; },
@@ -45,7 +51,11 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
               [](Scene& s, int v) { s.objective.smoothnessOrder = v + 2; });
   // Where the solve starts: it refines the transcription by itself when the motion needs it.
   f.addDouble(tr("Control points per second"), [](const Scene& s) { return s.transcription.controlPointsPerSecond; },
-              [](Scene& s, double v) { s.transcription.controlPointsPerSecond = v; }, 1, 200, 5, 1);
+              [](Scene& s, double v) {
+                // A rate typed in replaces the refinement's non-uniform knots.
+                s.transcription.controlPointsPerSecond = v;
+                s.transcription.knots.clear();
+              }, 1, 200, 5, 1);
   QStringList samples;
   for (int k = 1; k <= TranscriptionSpec::kMaxSamplesPerSegment; ++k) samples << QString::number(k);
   f.addChoice(tr("Samples per segment"), samples, [](const Scene& s) { return s.transcription.samplesPerSegment - 1; },

@@ -152,6 +152,15 @@ struct TranscriptionSpec {
   static constexpr int kMaxSamplesPerSegment = 8;
   double controlPointsPerSecond = 20;
   int samplesPerSegment = 2;
+  // The spline's interior knots (s, increasing, inside the clip), when the automatic refinement
+  // has split some segments (solver/refinement.h): they then replace the uniform knots of
+  // controlPointsPerSecond, which stays the rate the refinement started from. Empty: uniform.
+  std::vector<double> knots;
+  static constexpr double kMinKnotSpacing = 1e-4;  // s, between knots and from the clip's ends
+  // Spline segments on [t0, t1]: the knots', or the rate's.
+  double segments(double t0, double t1) const {
+    return knots.empty() ? (t1 - t0) * controlPointsPerSecond : static_cast<double>(knots.size() + 1);
+  }
   // Leg bubbles (solver/leg_bubbles.cpp): extra unknowns on the legs of a character standing on
   // several feet, so that each leg can follow its foot between the knots. The refinement turns
   // them on after a stall where they apply.

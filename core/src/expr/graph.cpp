@@ -82,14 +82,14 @@ Expr Graph::time() { return {this, intern(Op::Time, kNone, kNone)}; }
 
 Expr Graph::make(Op op, Expr a, Expr b) { return simplify(op, a, b); }
 
-Expr Graph::spline(const UniformBSpline& layout, const std::vector<std::uint32_t>& controls,
+Expr Graph::spline(const CubicBSpline& layout, const std::vector<std::uint32_t>& controls,
                    Expr time, int order) {
   if (static_cast<int>(controls.size()) != layout.controlPointCount())
     throw std::invalid_argument("expr: spline needs one variable per control point");
   return splineNode({layout, controls, order, -1}, time);
 }
 
-Expr Graph::splineBasis(const UniformBSpline& layout, int k, Expr time, int order) {
+Expr Graph::splineBasis(const CubicBSpline& layout, int k, Expr time, int order) {
   return splineNode({layout, {}, order, k}, time);
 }
 

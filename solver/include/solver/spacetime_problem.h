@@ -79,7 +79,7 @@ enum class Side { Contacts, Before, After };
 struct DofGroup {
   bool hermite = false;
   bool legBubbles = false;
-  UniformBSpline spline;         // B-spline group
+  CubicBSpline spline;         // B-spline group
   std::vector<double> breaks;    // Hermite and leg-bubble groups: breakpoints (the root's)
   int bubbles = 0;               // Hermite group: interior coefficients per interval and dof
   // Hermite: intervals with one more bubble (1), where a flight starts after a lift-off and the

@@ -57,7 +57,7 @@ struct FlightStart {
 };
 
 struct Transcription {
-  UniformBSpline motion;            // the actuated joints' spline
+  CubicBSpline motion;            // the actuated joints' spline
   std::vector<double> breakpoints;  // knots and contact edges, sorted
   std::vector<Sample> samples;      // sorted by time
   // Breakpoints where a flight starts after a fixed lift-off: for the characters lifting off,
@@ -72,7 +72,8 @@ struct Transcription {
   // id, only those for that character (Sample::appliesTo).
   std::vector<Sample> samplesIn(double t0, double t1, const std::string* character = nullptr) const;
   // A uniform grid with `factor` times as many points as there are samples (stance samples
-  // and the Gauss nodes kept for the other characters where some flights start not counted).
+  // and the Gauss nodes kept for the other characters where some flights start not counted);
+  // on non-uniform knots, each knot interval evenly with `factor` times its own samples.
   std::vector<double> denseGrid(int factor) const;
 };
 

@@ -53,11 +53,17 @@ struct FormulaCheck {
   std::string error;        // the formula no longer applies to the character (not expected)
 };
 
+// The largest unactuated residual the dense grid allows (fraction of weight): the engine issue's.
+inline constexpr double kDenseResidualLimit = 0.01;
+
 struct ValidityReport {
   int denseFactor = 10;
   double maxUnactuatedResidualSamples = 0;  // fraction of weight, at the collocation samples
   double maxUnactuatedResidualDense = 0;    // fraction of weight, on the dense grid (+ contact edges)
   double worstDenseTime = 0;
+  // The largest of those within each spline segment (Transcription::motion): where the
+  // refinement splits segments (solver/refinement.h).
+  std::vector<double> segmentResidualDense;
   double maxPinError = 0;                   // m
   double maxContactSlip = 0;                // m, horizontal distance from the anchor
   double maxContactPenetration = 0;         // m, below the ground

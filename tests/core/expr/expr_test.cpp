@@ -168,11 +168,11 @@ TEST(Expr, ForwardAndReverseDerivativesMatchFiniteDifferences) {
   EXPECT_EQ(checked, 300 * kVars);
 }
 
-// Spline nodes: values and time derivatives against UniformBSpline; derivatives with respect to
+// Spline nodes: values and time derivatives against CubicBSpline; derivatives with respect to
 // control points and (through a variable-dependent time) the chain rule, in forward and reverse
 // mode, against finite differences.
 TEST(Expr, SplineNodes) {
-  const UniformBSpline layout(0.0, 1.0, 5);
+  const CubicBSpline layout(0.0, 1.0, 5);
   const int m = layout.controlPointCount();  // 8 control variables, then x8 shifts time
   Graph g;
   std::vector<std::uint32_t> controls;

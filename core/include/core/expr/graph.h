@@ -56,16 +56,15 @@ struct Expr {
   Expr& operator/=(const Expr& o);
 };
 
-// A spline node's data: the uniform cubic B-spline layout, the control points' variable
+// A spline node's data: the cubic B-spline layout, the control points' variable
 // indices, and which time derivative it is (the seed's B-spline expressions).
 struct SplineTerm {
-  UniformBSpline spline;
+  CubicBSpline spline;
   std::vector<std::uint32_t> controls;  // variable index of each control point
   int order = 0;
   int indicator = -1;  // >= 0: the basis function of that control point (controls unused)
   bool operator==(const SplineTerm& o) const {
-    return spline.start() == o.spline.start() && spline.end() == o.spline.end() &&
-           spline.segmentCount() == o.spline.segmentCount() && controls == o.controls &&
+    return spline == o.spline && controls == o.controls &&
            order == o.order && indicator == o.indicator;
   }
   // Value at time t given the variables (template: the control values may be Jets).
@@ -90,11 +89,11 @@ class Graph {
   Graph();
 
   // sum_k B_k^(order)(t) x[controls[k]]: a spline of time over control-point variables.
-  Expr spline(const UniformBSpline& layout, const std::vector<std::uint32_t>& controls,
+  Expr spline(const CubicBSpline& layout, const std::vector<std::uint32_t>& controls,
               Expr time, int order = 0);
   const SplineTerm& splineTerm(std::uint32_t index) const { return splines_[index]; }
   // B_k^(order)(t): the basis function of control point k.
-  Expr splineBasis(const UniformBSpline& layout, int k, Expr time, int order);
+  Expr splineBasis(const CubicBSpline& layout, int k, Expr time, int order);
 
   Expr constant(double value);
   Expr variable(std::uint32_t index);
