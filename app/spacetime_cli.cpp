@@ -221,8 +221,9 @@ int run(int argc, char** argv) {
   const ValidityReport& validity = solved.validity;
   if (solved.attempts.size() > 1)  // the transcriptions tried, when the solve refined
     for (const TranscriptionAttempt& a : solved.attempts)
-      std::fprintf(stderr, "transcription %g control points/s, s = %d%s: %s%s, objective %.9g, dense-grid residual %.3g of weight, %.3f s%s\n",
-                   a.controlPointsPerSecond, a.samplesPerSegment, a.legBubbles ? ", leg bubbles" : "", toString(a.status).c_str(),
+      std::fprintf(stderr, "transcription %g control points/s%s, %d segments, s = %d%s: %s%s, objective %.9g, dense-grid residual %.3g of weight, %.3f s%s\n",
+                   a.controlPointsPerSecond, a.nonUniform ? " split where the residual was large" : "", a.segments,
+                   a.samplesPerSegment, a.legBubbles ? ", leg bubbles" : "", toString(a.status).c_str(),
                    a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,
                    a.maxUnactuatedResidualDense, a.seconds, a.kept ? " (kept)" : "");
   std::string warning;

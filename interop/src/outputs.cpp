@@ -84,11 +84,15 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   const TranscriptionSpec& spec = problem.scene().transcription;
   j["transcription"] = {{"control_points_per_second", spec.controlPointsPerSecond},
                         {"samples_per_segment", spec.samplesPerSegment},
-                        {"leg_bubbles", spec.legBubbles}};
+                        {"leg_bubbles", spec.legBubbles},
+                        {"segments", problem.transcription().motion.segmentCount()},
+                        {"knots", spec.knots}};
   json refinement = json::array();
   for (const TranscriptionAttempt& a : attempts)
     refinement.push_back({{"control_points_per_second", a.controlPointsPerSecond},
                           {"samples_per_segment", a.samplesPerSegment},
+                          {"segments", a.segments},
+                          {"non_uniform", a.nonUniform},
                           {"leg_bubbles", a.legBubbles},
                           {"why", a.why},
                           {"status", toString(a.status)},

@@ -31,9 +31,11 @@ bool atLeastAsGood(const TranscriptionAttempt& a, const TranscriptionAttempt& b)
   return rank(a) > 0 || !(a.maxViolation > b.maxViolation);
 }
 
-// "20 control points per second, s = 6" (and ", with leg bubbles").
+// "20 control points per second, s = 6" (and ", with leg bubbles"), or "27 segments split
+// from 20 control points per second, s = 8".
 std::string resolution(const TranscriptionAttempt& a) {
   std::ostringstream s;
+  if (a.nonUniform) s << a.segments << " segments split from ";
   s << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
     << (a.legBubbles ? ", with leg bubbles" : "");
   return s.str();
@@ -63,9 +65,35 @@ bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions&
                          double growth) {
   *finer = spec;
   finer->samplesPerSegment = std::max(spec.samplesPerSegment, RefinementOptions::kMaxRefinedSamples);
+  finer->knots.clear();
   const double cap = options.maxControlPointsPerSecond;
   if (spec.controlPointsPerSecond >= cap * (1 - 1e-9)) return false;
   finer->controlPointsPerSecond = std::min(spec.controlPointsPerSecond * growth, cap);
+  return true;
+}
+
+bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& motion, const ValidityReport& report,
+                         const RefinementOptions& options, TranscriptionSpec* finer) {
+  const int segments = motion.segmentCount();
+  if (!(report.maxUnactuatedResidualDense > kDenseResidualLimit) ||
+      static_cast<int>(report.segmentResidualDense.size()) != segments)
+    return false;
+  const double shortest = 2 / options.maxControlPointsPerSecond;  // two intervals at the cap
+  std::vector<double> knots;
+  int split = 0;
+  for (int k = 0; k < segments; ++k) {
+    const double a = motion.knot(k), h = motion.segmentLength(k);
+    if (k > 0) knots.push_back(a);
+    if (report.segmentResidualDense[static_cast<size_t>(k)] > RefinementOptions::kSplitFraction * kDenseResidualLimit &&
+        h >= shortest * (1 - 1e-9)) {
+      knots.push_back(a + h / 2);
+      ++split;
+    }
+  }
+  if (split == 0 || split > (RefinementOptions::kRateGrowth - 1) * segments) return false;
+  *finer = spec;
+  finer->samplesPerSegment = std::max(spec.samplesPerSegment, RefinementOptions::kMaxRefinedSamples);
+  finer->knots = std::move(knots);
   return true;
 }
 
@@ -83,6 +111,8 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     const TranscriptionSpec spec = problem->scene().transcription;
     attempt.controlPointsPerSecond = spec.controlPointsPerSecond;
     attempt.samplesPerSegment = spec.samplesPerSegment;
+    attempt.segments = problem->transcription().motion.segmentCount();
+    attempt.nonUniform = !problem->transcription().motion.uniform();
     attempt.legBubbles = spec.legBubbles;
     attempt.why = why;
     // A stall at the scene's own transcription is refined before anything else: there it is
@@ -141,9 +171,13 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // rate: its legs could not follow their feet (the quadruped squat of
     // tests/solver/leg_bubbles_test.cpp stalls at any rate without them).
     const SpacetimeProblem& solved = problem ? *problem : *best.problem;  // this level's
+    const ValidityReport& solvedValidity = problem ? validity : best.validity;
     TranscriptionSpec finer = spec;
     finer.legBubbles = true;
-    if (attempt.converged || spec.legBubbles || !solved.legBubblesWouldApply()) {
+    if (attempt.converged && !spec.legBubbles &&
+        refineWhereResidual(spec, solved.transcription().motion, solvedValidity, refinement, &finer)) {
+      // Split where the dense grid failed; the rest keeps its resolution.
+    } else if (attempt.converged || spec.legBubbles || !solved.legBubblesWouldApply()) {
       // With leg bubbles the rate grows by half and s stays: s - 1 = 7 bubbles per interval at
       // s = 8 move unseen between the nodes (the planar quadruped's hop: 20/6 slips 0.36 mm
       // between them, 30/6 is valid, 60/8 leaves 0.24 x the weight unexplained).

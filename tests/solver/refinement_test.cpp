@@ -3,6 +3,9 @@
 // and a valid one is left alone.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "../shipped_scene.h"
 #include "solver/interior_point.h"
 #include "solver/refinement.h"
@@ -51,10 +54,58 @@ TEST(Refinement, AValidMotionIsNotRefined) {
   EXPECT_EQ(r.problem->scene().transcription.samplesPerSegment, scene.transcription.samplesPerSegment);
 }
 
+// Splitting where the dense grid fails (refineWhereResidual): the segments above half the limit
+// are halved and no others; the rate stays, s rises to 8. Nothing is split where the residual
+// passes, where more segments fail than the uniform refinement would add (it is then the
+// better refinement), or where a segment is already as short as two intervals of the rate cap.
+TEST(Refinement, SegmentsAreSplitWhereTheDenseResidualIsLarge) {
+  TranscriptionSpec spec;
+  spec.controlPointsPerSecond = 20;
+  spec.samplesPerSegment = 6;
+  const CubicBSpline motion(0.0, 1.2, 24);
+  ValidityReport report;
+  report.maxUnactuatedResidualDense = 0.03;
+  report.segmentResidualDense.assign(24, 0.001);
+  report.segmentResidualDense[7] = 0.03;
+  report.segmentResidualDense[8] = 0.006;
+  report.segmentResidualDense[12] = 0.004;  // below half the limit
+  const RefinementOptions options;
+  TranscriptionSpec finer;
+  ASSERT_TRUE(refineWhereResidual(spec, motion, report, options, &finer));
+  EXPECT_EQ(finer.controlPointsPerSecond, 20);
+  EXPECT_EQ(finer.samplesPerSegment, RefinementOptions::kMaxRefinedSamples);
+  ASSERT_EQ(finer.knots.size(), 23u + 2);
+  for (int k = 1; k < 24; ++k)
+    EXPECT_TRUE(std::any_of(finer.knots.begin(), finer.knots.end(), [&](double t) { return std::abs(t - 0.05 * k) < 1e-12; })) << k;
+  EXPECT_NEAR(finer.knots[7], 0.375, 1e-12);
+  EXPECT_NEAR(finer.knots[9], 0.425, 1e-12);
+  EXPECT_TRUE(std::is_sorted(finer.knots.begin(), finer.knots.end()));
+  // The uniform refinement after it starts from the rate again.
+  TranscriptionSpec uniform;
+  ASSERT_TRUE(refineTranscription(finer, options, &uniform));
+  EXPECT_TRUE(uniform.knots.empty());
+  EXPECT_EQ(uniform.controlPointsPerSecond, 30);
+
+  ValidityReport passing = report;
+  passing.maxUnactuatedResidualDense = 0.009;
+  EXPECT_FALSE(refineWhereResidual(spec, motion, passing, options, &finer));
+  ValidityReport everywhere = report;
+  for (int k = 0; k < 13; ++k) everywhere.segmentResidualDense[static_cast<size_t>(k)] = 0.02;
+  EXPECT_FALSE(refineWhereResidual(spec, motion, everywhere, options, &finer));  // 13 > 24 / 2
+  const CubicBSpline fine(0.0, 1.2, 96);  // 12.5 ms segments: the cap's rate (80 per second)
+  ValidityReport atTheCap;
+  atTheCap.maxUnactuatedResidualDense = 0.03;
+  atTheCap.segmentResidualDense.assign(96, 0.0);
+  atTheCap.segmentResidualDense[30] = 0.03;
+  EXPECT_FALSE(refineWhereResidual(spec, fine, atTheCap, options, &finer));
+}
+
 // The 1.2 m rung of the jump ladder: at the shipped 20 control points per second and s = 6 the
 // solve converges, but 58 % of the lamp's weight is unexplained between the samples (the
-// validity report fails; objective 376). Refined (30 control points per second, s = 8), the
-// motion passes every check, on the dense grid too, and the summary says where it ended.
+// validity report fails; objective 376). Its segments are split where that residual is (24 → 35
+// segments, s = 8; then once more, 36), and the motion passes every check, on the dense grid
+// too, at a lower objective than the uniform 30 control points per second reach (97.55 against
+// 136.82, the same 36 segments), and the summary says where it ended.
 TEST(Refinement, TheLongerJumpBecomesValidOnAFinerTranscription) {
   const Scene scene = testing::testScene("ladder/luxo_jump_1.2m.json");
   SolverOptions options = solverOptionsFor(scene.solver);
@@ -73,11 +124,18 @@ TEST(Refinement, TheLongerJumpBecomesValidOnAFinerTranscription) {
   ASSERT_GE(refined.attempts.size(), 2u);
   EXPECT_FALSE(refined.attempts.front().valid);
   EXPECT_TRUE(refined.attempts.back().kept);
-  EXPECT_GT(refined.problem->scene().transcription.controlPointsPerSecond, scene.transcription.controlPointsPerSecond);
+  // Split where the residual was, fewer segments than a uniform refinement would have at the
+  // kept transcription's level (1.5x per level).
+  const TranscriptionAttempt& kept = refined.attempts.back();
+  EXPECT_TRUE(kept.nonUniform);
+  EXPECT_FALSE(refined.problem->scene().transcription.knots.empty());
+  EXPECT_GT(kept.segments, 24);
+  EXPECT_LT(kept.segments, 24 * std::pow(RefinementOptions::kRateGrowth, refined.attempts.size() - 1));
   EXPECT_NE(refined.summary.reason.find("finer transcription"), std::string::npos) << refined.summary.reason;
   // The refined motion is a better optimum, not only a finer one: the coarse one spent effort on
   // what its transcription could not resolve.
   EXPECT_LT(refined.summary.objective, coarse.summary.objective);
+  EXPECT_LT(refined.summary.objective, 136.8);  // the uniform refinement's optimum (30 per second, s = 8)
 }
 
 // The ladder's 1.5 m rung from the default guess, as `spacetime-cli solve` runs it: at the

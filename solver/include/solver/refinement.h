@@ -21,8 +21,11 @@
 // the restoration phase does not show to conflict goes to the interior point
 // (SolverOptions::interiorPointAfterStall), as do the finer transcriptions after it.
 //
-// The refinement is uniform: every interval gets finer, also where the residual was small.
-// Measured on the jump ladder (tests/scenes/ladder/; docs/validation.md).
+// Where a converged motion fails only between the samples in a few places, the refinement is
+// local instead (refineWhereResidual): the spline segments whose dense-grid residual is large
+// are split in two, the knots becoming non-uniform (TranscriptionSpec::knots), and the rest of
+// the motion keeps its resolution. Measured on the jump ladder (tests/scenes/ladder/;
+// docs/validation.md).
 #pragma once
 
 #include <atomic>
@@ -45,12 +48,17 @@ struct RefinementOptions {
   // 20, 30 and 45 control points per second and solves at 60, where 1.5x steps spent the budget
   // on the intermediate rates).
   static constexpr double kStallRateGrowth = 3;
+  // Segments whose dense-grid residual is above this fraction of the limit are split
+  // (refineWhereResidual), while they are fewer than the uniform refinement would add.
+  static constexpr double kSplitFraction = 0.5;
 };
 
 // One transcription the solve ran on, and how that solve ended.
 struct TranscriptionAttempt {
   double controlPointsPerSecond = 0;
   int samplesPerSegment = 0;
+  int segments = 0;               // spline segments
+  bool nonUniform = false;       // on the refinement's knots (TranscriptionSpec::knots)
   bool legBubbles = false;       // with leg bubbles (TranscriptionSpec::legBubbles)
   std::string why;               // why this transcription was tried ("the scene's", or the failure)
   SolveStatus status = SolveStatus::InvalidOptions;
@@ -73,10 +81,18 @@ struct RefinedSolve {
   bool valid = false;                         // the kept motion converged and passes every check
 };
 
-// The next finer transcription after `spec`: `growth` times its rate, at most the cap, and at
-// least kMaxRefinedSamples; false when its rate is at the cap already.
+// The next finer transcription after `spec`: `growth` times its rate, at most the cap, uniform
+// again, and at least kMaxRefinedSamples; false when its rate is at the cap already.
 bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer,
                          double growth = RefinementOptions::kRateGrowth);
+
+// The local refinement after a converged motion whose dense-grid residual fails: `motion`'s
+// segments whose residual (report.segmentResidualDense) is above kSplitFraction of the limit,
+// split at their middle, at least kMaxRefinedSamples per segment. False (refine uniformly) when
+// the residual passes, or when no segment may be split (none longer than two intervals of the
+// rate cap) or more would be than kRateGrowth adds.
+bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& motion, const ValidityReport& report,
+                         const RefinementOptions& options, TranscriptionSpec* finer);
 
 // Solves `problem` (built from its scene) and refines as above. The progress callback and cancel
 // flag apply to every solve; options.maxSeconds bounds them all together. The returned problem is
