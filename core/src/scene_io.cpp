@@ -526,12 +526,11 @@ Scene readScene(const Reader& r, const json& root) {
     if (t.contains("knots")) {
       const json& k = t["knots"];
       if (!k.is_array()) r.badValue("transcription.knots", k, "an array of increasing times inside the clip");
-      const double gap = TranscriptionSpec::kMinKnotSpacing;
       for (size_t i = 0; i < k.size(); ++i) {
         const std::string path = Reader::index("transcription.knots", i);
         const double v = r.number(k[i], path);
         const double after = s.transcription.knots.empty() ? s.startTime : s.transcription.knots.back();
-        if (!(v >= after + gap && v <= s.endTime - gap))
+        if (!TranscriptionSpec::knotFollows(after, v, s.endTime))
           r.badValue(path, k[i], "a time at least 1e-4 s after " + std::string(i ? "the knot before it" : "time.start") +
                                      " and before time.end");
         s.transcription.knots.push_back(v);

@@ -64,8 +64,7 @@ Transcription Transcription::fromScene(const Scene& scene) {
   // have changed since), the scene's rate otherwise.
   std::vector<double> knots = {t0};
   for (double k : scene.transcription.knots)
-    if (k >= knots.back() + TranscriptionSpec::kMinKnotSpacing && k <= t1 - TranscriptionSpec::kMinKnotSpacing)
-      knots.push_back(k);
+    if (TranscriptionSpec::knotFollows(knots.back(), k, t1)) knots.push_back(k);
   knots.push_back(t1);
   tr.motion = scene.transcription.knots.empty()
                   ? CubicBSpline(t0, t1, segmentsFor(t0, t1, scene.transcription.controlPointsPerSecond))

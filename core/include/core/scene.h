@@ -157,6 +157,11 @@ struct TranscriptionSpec {
   // controlPointsPerSecond, which stays the rate the refinement started from. Empty: uniform.
   std::vector<double> knots;
   static constexpr double kMinKnotSpacing = 1e-4;  // s, between knots and from the clip's ends
+  // Whether a knot at t may follow the knot (or the clip's start) at `after` in a clip ending at
+  // `end`: the loader's rule, which the transcription also applies to scenes built in code.
+  static bool knotFollows(double after, double t, double end) {
+    return t >= after + kMinKnotSpacing && t <= end - kMinKnotSpacing;
+  }
   // Spline segments on [t0, t1]: the knots', or the rate's.
   double segments(double t0, double t1) const {
     return knots.empty() ? (t1 - t0) * controlPointsPerSecond : static_cast<double>(knots.size() + 1);
