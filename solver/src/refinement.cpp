@@ -33,23 +33,15 @@ bool atLeastAsGood(const TranscriptionAttempt& a, const TranscriptionAttempt& b)
 
 // "20 control points per second, s = 6" (and ", with leg bubbles"), or "27 segments split
 // from 20 control points per second, s = 8".
-std::string resolution(const TranscriptionAttempt& a) {
-  std::ostringstream s;
-  if (a.nonUniform) s << a.segments << " segments split from ";
-  s << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
-    << (a.legBubbles ? ", with leg bubbles" : "");
-  return s.str();
-}
-
 // Why the next transcription is tried: how this one's solve ended, or its first failing check.
 std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCheck>& checks) {
   std::ostringstream why;
   if (!a.converged) {
-    why << "the solve at " << resolution(a) << " stopped " << toString(a.status) << " (violation " << a.maxViolation
+    why << "the solve at " << describeResolution(a) << " stopped " << toString(a.status) << " (violation " << a.maxViolation
         << ")";
     return why.str();
   }
-  why << "the motion at " << resolution(a) << " failed";
+  why << "the motion at " << describeResolution(a) << " failed";
   for (const ValidityCheck& c : checks)
     if (!c.pass) {
       why << " " << c.name;
@@ -60,6 +52,14 @@ std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCh
 }
 
 }  // namespace
+
+std::string describeResolution(const TranscriptionAttempt& a) {
+  std::ostringstream s;
+  if (a.nonUniform) s << a.segments << " segments split from ";
+  s << a.controlPointsPerSecond << " control points per second, s = " << a.samplesPerSegment
+    << (a.legBubbles ? ", with leg bubbles" : "");
+  return s.str();
+}
 
 bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer,
                          double growth) {
@@ -99,7 +99,7 @@ bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& moti
 
 RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptions options,
                           const RefinementOptions& refinement, const ProgressCallback& callback,
-                          const std::atomic<bool>* cancel) {
+                          const std::atomic<bool>* cancel, const TranscriptionCallback& starting) {
   const Clock::time_point start = Clock::now();
   const double spentBefore = options.spentSeconds;
   RefinedSolve best;
@@ -124,6 +124,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     if (level == 0 && refinement.enabled && refinement.maxRefinements > 0 &&
         refineTranscription(spec, refinement, &next, RefinementOptions::kStallRateGrowth))
       levelOptions.interiorPointAfterStall = false;
+    if (starting) starting(*problem);
     const SolverSummary summary = solveSpacetime(*problem, levelOptions, callback, cancel);
     ValidityReport validity = checkValidity(*problem, 10, cancel);
     const std::vector<ValidityCheck> checks = validityChecklist(validity);
@@ -229,7 +230,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   if (best.attempts.size() > 1) {
     std::ostringstream note;
     note << "; " << best.attempts.size() - 1 << " finer transcription" << (best.attempts.size() > 2 ? "s" : "")
-         << " tried, the motion kept is at " << resolution(best.attempts[bestAttempt]);
+         << " tried, the motion kept is at " << describeResolution(best.attempts[bestAttempt]);
     best.summary.reason += note.str();
   }
   return best;

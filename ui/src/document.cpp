@@ -78,6 +78,28 @@ void Document::remember(const std::shared_ptr<const SolvedMotion>& motion) {
 
 bool Document::acceptResult(std::shared_ptr<const SolvedMotion> motion) {
   if (!motion || !motionFitsScene(*motion, scene_)) return false;  // a result of an older structure
+  if (motion->converged && motion->scene) {
+    // A solve of this scene that refined its transcription: the scene takes the finer one, as an
+    // edit the user can undo, so that saving keeps the motion with the transcription it fits and
+    // the next solve starts there. Remembered first, so the edit shows it as the scene's solution.
+    Scene refined = scene_;
+    refined.transcription = motion->scene->transcription;
+    const std::string key = problemKey(refined);
+    if (key == problemKey(*motion->scene) && key != problemKey(scene_)) {
+      remember(motion);
+      lastGood_ = motion;
+      stopped_.reset();
+      const auto kept = std::find_if(motion->transcriptions.begin(), motion->transcriptions.end(),
+                                     [](const TranscriptionAttempt& a) { return a.kept; });
+      // The undo view's text says to what; the Undo action's (after the newline) stays short.
+      const QString text = kept == motion->transcriptions.end()
+                               ? tr("Refine the transcription")
+                               : tr("Refine the transcription to %1\nRefine the transcription")
+                                     .arg(QString::fromStdString(describeResolution(*kept)));
+      undo_.push(new EditScene(this, text, scene_, std::move(refined), 0));
+      return true;
+    }
+  }
   if (motion->converged || !lastGood_ || !motionFitsScene(*lastGood_, scene_)) {
     if (motion->converged) {
       remember(motion);

@@ -3,6 +3,7 @@
 #include <QScrollArea>
 #include <QVBoxLayout>
 #include <algorithm>
+#include <cmath>
 
 namespace spacetime::ui {
 
@@ -60,6 +61,20 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
   for (int k = 1; k <= TranscriptionSpec::kMaxSamplesPerSegment; ++k) samples << QString::number(k);
   f.addChoice(tr("Samples per segment"), samples, [](const Scene& s) { return s.transcription.samplesPerSegment - 1; },
               [](Scene& s, int v) { s.transcription.samplesPerSegment = v + 1; });
+  // The spline's segments: the rate's, or where the solve split them (Document::acceptResult).
+  auto* segments = new QLabel;
+  segments->setObjectName("segments");
+  segments->setWordWrap(true);
+  f.addWidget(tr("Segments"), segments);
+  auto showSegments = [this, segments] {
+    const Scene& s = doc_->scene();
+    const int n = std::max(1, static_cast<int>(std::lround(s.transcription.segments(s.startTime, s.endTime))));
+    segments->setText(s.transcription.knots.empty()
+                          ? tr("%1, uniform").arg(n)
+                          : tr("%1, split where the solve refined the transcription").arg(n));
+  };
+  showSegments();
+  connect(doc_, &Document::sceneChanged, segments, showSegments);
   // Extra unknowns for characters on several feet (solver/leg_bubbles.cpp); the solve also turns
   // them on by itself after a stall.
   f.addBool(tr("Leg bubbles"), [](const Scene& s) { return s.transcription.legBubbles; },

@@ -72,7 +72,8 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   ++alive_;
   QPointer<SolverJob> self(this);
   const int threadCount = threads, liveInterval = liveIntervalMs;
-  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount, liveInterval]() {
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount, liveInterval,
+                             refinement = refinement]() {
     // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
     // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
     // SCHED_IDLE runs it only on otherwise idle time; nice 15 alone was not enough once the
@@ -115,20 +116,26 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
         first->maxViolation = m.maxViolation;
         post(run, first);
       }
-      const SolverSummary summary = solveSpacetime(
-          *problem, options,
+      // The problem whose iterates the live view samples: the scene's, then each finer
+      // transcription the refinement solves when a motion fails its checks (solveRefined owns
+      // them all, and hands back the one whose motion it kept).
+      const SpacetimeProblem* solving = problem.get();
+      RefinedSolve solved = solveRefined(
+          std::move(problem), options, refinement,
           [&, lastLive = std::chrono::steady_clock::now()](const IterationReport& r) mutable {
             const auto now = std::chrono::steady_clock::now();
             if (now - lastLive < std::chrono::milliseconds(liveInterval)) return !run->cancel.load();
             lastLive = now;
-            auto motion = sampleMotion(*problem);
+            auto motion = sampleMotion(*solving);
             motion->objective = r.objective;
             motion->maxViolation = r.maxViolation;
             motion->iterations = r.iterations;
             post(run, motion);
             return !run->cancel.load();
           },
-          &run->cancel);
+          &run->cancel, [&](const SpacetimeProblem& next) { solving = &next; });
+      problem = std::move(solved.problem);
+      const SolverSummary summary = solved.summary;
       auto final = sampleMotion(*problem);
       final->objective = summary.objective;
       final->maxViolation = summary.maxViolation;
@@ -137,6 +144,10 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->converged = summary.converged;
       final->reason = summary.reason;
       final->violated = summary.violated;
+      final->transcriptions = solved.attempts;
+      // The refinement checked the motion it kept; a solve stopped by the user was not (the
+      // check stops with it), and is checked below, after the motion is on screen.
+      if (!solved.validity.cancelled) final->validity = std::make_shared<const ValidityReport>(std::move(solved.validity));
       const int gen = run->generation;
       result = final;
       {
@@ -155,9 +166,9 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
     // The solve is over for the interface. Decrement through the event loop, so waitForFinished
     // sees the result (or the failure) first.
     QMetaObject::invokeMethod(qApp, [self] { if (self) --self->running_; }, Qt::QueuedConnection);
-    // The result is on screen now; its validity report (tens of milliseconds for a jump: the
-    // dense grid and a forward simulation of every flight) follows as a `validated` signal.
-    if (result) {
+    // A cancelled result is on screen now without its validity report (tens of milliseconds for a
+    // jump: the dense grid and a forward simulation of every flight); it follows as `validated`.
+    if (result && !result->validity) {
       // Once a newer run has replaced this one the report would be dropped; it stops then, rather
       // than slow the new solve down beside it (dragging the Luxo end pose: each report ran next
       // to the following solve on the 2 cores).

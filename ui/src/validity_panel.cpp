@@ -121,6 +121,13 @@ void ValidityPanel::rebuild() {
                   .arg(checks.size());
   else
     verdict = tr("Physically valid: all %1 checks pass.").arg(checks.size());
+  // A solve that refined its transcription says why, and where the motion shown lives.
+  const std::vector<TranscriptionAttempt>& tried = motion->transcriptions;
+  const auto kept = std::find_if(tried.begin(), tried.end(), [](const TranscriptionAttempt& a) { return a.kept; });
+  if (tried.size() > 1 && kept != tried.end())
+    verdict += tr(" The solve refined the transcription %1, because %2; this motion is at %3.")
+                   .arg(tried.size() == 2 ? tr("once") : tr("%1 times").arg(tried.size() - 1),
+                        QString::fromStdString(tried[1].why), QString::fromStdString(describeResolution(*kept)));
   // After an edit the motion on screen is still the last solve's, checked against its own scene.
   if (motion->scene && sceneToJson(*motion->scene) != sceneToJson(doc_->scene()))
     verdict = tr("The scene changed since this solve; these checks are of the solved scene. ") + verdict;

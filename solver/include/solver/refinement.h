@@ -29,6 +29,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -81,6 +82,15 @@ struct RefinedSolve {
   bool valid = false;                         // the kept motion converged and passes every check
 };
 
+// The transcription an attempt ran on, in words: "20 control points per second, s = 6", or
+// "32 segments split from 20 control points per second, s = 8".
+std::string describeResolution(const TranscriptionAttempt& attempt);
+
+// Called (from the solving thread) with each transcription's problem just before it is solved:
+// the scene's own, then each finer one, already started from the best motion so far. A live
+// view samples the iterates of this problem: the finer ones are not the problem it passed in.
+using TranscriptionCallback = std::function<void(const SpacetimeProblem&)>;
+
 // The next finer transcription after `spec`: `growth` times its rate, at most the cap, uniform
 // again, and at least kMaxRefinedSamples; false when its rate is at the cap already.
 bool refineTranscription(const TranscriptionSpec& spec, const RefinementOptions& options, TranscriptionSpec* finer,
@@ -95,10 +105,11 @@ bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& moti
                          const RefinementOptions& options, TranscriptionSpec* finer);
 
 // Solves `problem` (built from its scene) and refines as above. The progress callback and cancel
-// flag apply to every solve; options.maxSeconds bounds them all together. The returned problem is
+// flag apply to every solve; options.maxSeconds bounds them all together; `starting` hears of
+// each transcription before its solve. The returned problem is
 // `problem` itself when no refinement ran.
 RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptions options,
                           const RefinementOptions& refinement, const ProgressCallback& callback = nullptr,
-                          const std::atomic<bool>* cancel = nullptr);
+                          const std::atomic<bool>* cancel = nullptr, const TranscriptionCallback& starting = nullptr);
 
 }  // namespace spacetime

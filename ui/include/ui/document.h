@@ -63,7 +63,9 @@ class Document : public QObject {
   // its scene. One that stopped without converging (stalled, out of time, Stop) goes on show only
   // when there is no converged motion that fits the scene to keep showing; otherwise the last
   // converged motion stays (or comes back, after the live iterates) and the stopped one is kept
-  // as stoppedMotion(). Returns whether `motion` is on show.
+  // as stoppedMotion(). A converged motion of this scene on a transcription the solve refined
+  // also sets the scene's transcription to it, as one undo command ("Refine the transcription").
+  // Returns whether `motion` is on show.
   bool acceptResult(std::shared_ptr<const SolvedMotion> motion);
   // The last result that stopped without converging and was not put on show (null when none).
   std::shared_ptr<const SolvedMotion> stoppedMotion() const { return stopped_; }

@@ -8,6 +8,7 @@
 
 #include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
+#include "solver/refinement.h"
 #include "solver/spacetime_problem.h"
 #include "solver/validity.h"
 
@@ -30,6 +31,9 @@ struct SolvedMotion {
   // The constraints a final solve left unmet, largest first (empty when it converged): when the
   // violation stalls, the ones in conflict.
   std::vector<ViolatedConstraint> violated;
+  // The transcriptions a final solve ran on, the scene's first (solver/refinement.h): more than
+  // one when it refined the transcription because a coarser motion failed its checks.
+  std::vector<TranscriptionAttempt> transcriptions;
   // The validity report of a final or loaded solution (null for iterates and guesses): is the
   // motion physical between the samples too?
   std::shared_ptr<const ValidityReport> validity;

@@ -3,6 +3,9 @@
 // wins: iterates the interface has not drawn yet are replaced, never queued); Stop sets an
 // atomic flag the solver checks every iteration. Starting a new solve while one runs cancels
 // the old one, whose late results are dropped - that is auto-solve while dragging.
+// The solve refines its transcription where the motion fails its validity checks, as the
+// command line's does (solveRefined): the result carries the transcriptions it tried and is
+// checked already, and the document adopts the finer transcription (Document::acceptResult).
 #pragma once
 
 #include <QObject>
@@ -14,6 +17,7 @@
 
 #include "core/scene.h"
 #include "solver/augmented_lagrangian.h"
+#include "solver/refinement.h"
 #include "ui/solved_motion.h"
 
 namespace spacetime::ui {
@@ -44,13 +48,16 @@ class SolverJob : public QObject {
   // the solver's 10 reports a second, and a luxo_jump solve took 26 s in the editor against
   // 6 s alone (measured with `spacetime --screenshot`, `perf record`).
   int liveIntervalMs = 250;
+  // How far a solve may refine the transcription when its motion fails the validity checks.
+  RefinementOptions refinement;
 
  signals:
   void iterate(std::shared_ptr<const spacetime::ui::SolvedMotion> motion);
   void finished(std::shared_ptr<const spacetime::ui::SolvedMotion> motion,
                 const spacetime::SolverSummary& summary);
   void failed(const QString& reason);
-  // The validity report of a finished motion, computed after it was handed over.
+  // The validity report of a motion whose solve was cancelled (Stop), computed after it was
+  // handed over (any other result carries its report).
   void validated(std::shared_ptr<const spacetime::ui::SolvedMotion> motion,
                  std::shared_ptr<const spacetime::ValidityReport> report);
 
