@@ -59,7 +59,8 @@ constexpr const char* kHelp =
     "                     augmented Lagrangian where its steps fail (default: the scene's\n"
     "                     solver.method, else al)\n"
     "  --max-refinements N  finer transcriptions tried when the motion fails the validity report\n"
-    "                     or the solve stalls (default 3; 0: only the scene's transcription)\n"
+    "                     or the solve stalls (default: the scene's solver.maxRefinements, else\n"
+    "                     3; 0: only the scene's transcription)\n"
     "  --init SOLVED.json start from the solution stored in a scene: DIR/scene.json of an earlier\n"
     "                     solve (resumes it exactly when the scene is the same) or an editor save.\n"
     "                     Without it a scene's own stored solution is the start.\n"
@@ -104,7 +105,7 @@ int run(int argc, char** argv) {
   double maxSeconds = SolverOptions{}.maxSeconds;  // the whole solve's wall-clock budget
   bool quiet = false;
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
-  RefinementOptions refinement;
+  int maxRefinements = -1;  // --max-refinements: overrides the scene's solver.maxRefinements
   std::string initPath;  // --init: a scene holding a stored solution
   std::string method;    // --method: overrides the scene's solver.method
   for (int i = 2; i < argc; ++i) {
@@ -132,8 +133,9 @@ int run(int argc, char** argv) {
     else if (a == "--max-refinements" && i + 1 < argc) {
       char* end = nullptr;
       const long n = std::strtol(argv[++i], &end, 10);
-      if (!end || *end || n < 0 || n > 10) return usage("--max-refinements must be a whole number in [0, 10]");
-      refinement.maxRefinements = static_cast<int>(n);
+      if (!end || *end || n < 0 || n > SolverSpec::kMaxRefinements)
+        return usage("--max-refinements must be a whole number in [0, 10]");
+      maxRefinements = static_cast<int>(n);
     }
     else if (a == "--init" && i + 1 < argc) initPath = argv[++i];
     else if (a == "--method" && i + 1 < argc) {
@@ -215,6 +217,8 @@ int run(int argc, char** argv) {
                    r.iterations, r.outer, r.objective, r.maxViolation, r.rho);
       return true;
     };
+  RefinementOptions refinement = refinementOptionsFor(loaded.scene->solver);
+  if (maxRefinements >= 0) refinement.maxRefinements = maxRefinements;
   RefinedSolve solved = solveRefined(std::move(problem), options, refinement, progress);
   problem = std::move(solved.problem);
   const SolverSummary& summary = solved.summary;

@@ -540,7 +540,7 @@ Scene readScene(const Reader& r, const json& root) {
   if (root.contains("solver")) {
     const json& t = root["solver"];
     r.allowKeys(t, "solver", {"method", "maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty",
-                                  "bodiesAboveGround"});
+                                  "bodiesAboveGround", "maxRefinements"});
     if (t.contains("method")) {
       s.solver.method = r.string(t["method"], "solver.method");
       if (std::find(std::begin(SolverSpec::kMethods), std::end(SolverSpec::kMethods), s.solver.method) ==
@@ -549,6 +549,9 @@ Scene readScene(const Reader& r, const json& root) {
     }
     if (t.contains("bodiesAboveGround"))
       s.solver.bodiesAboveGround = r.boolean(t["bodiesAboveGround"], "solver.bodiesAboveGround");
+    if (t.contains("maxRefinements"))
+      s.solver.maxRefinements =
+          r.integer(t["maxRefinements"], "solver.maxRefinements", 0, SolverSpec::kMaxRefinements);
     if (t.contains("maxOuterIterations"))
       s.solver.maxOuterIterations = r.integer(t["maxOuterIterations"], "solver.maxOuterIterations", 1, 1000);
     if (t.contains("maxInnerIterations"))
@@ -845,7 +848,8 @@ std::string sceneToJson(const Scene& s) {
                     {"maxInnerIterations", s.solver.maxInnerIterations},
                     {"tolerance", s.solver.tolerance},
                     {"maxPenalty", s.solver.maxPenalty},
-                    {"bodiesAboveGround", s.solver.bodiesAboveGround}};
+                    {"bodiesAboveGround", s.solver.bodiesAboveGround},
+                    {"maxRefinements", s.solver.maxRefinements}};
   json chars = json::array();
   for (const auto& c : s.characters) {
     json jc;

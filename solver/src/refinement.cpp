@@ -53,6 +53,12 @@ std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCh
 
 }  // namespace
 
+RefinementOptions refinementOptionsFor(const SolverSpec& spec) {
+  RefinementOptions options;
+  options.maxRefinements = spec.maxRefinements;
+  return options;
+}
+
 std::string describeResolution(const TranscriptionAttempt& a) {
   std::ostringstream s;
   if (a.nonUniform) s << a.segments << " segments split from ";

@@ -62,11 +62,14 @@ TEST(SceneIo, SolverMethodFrameRateLegBubblesAndKnotsRoundTrip) {
   EXPECT_EQ(scene.frameRate, 24);  // the default
   scene.frameRate = 30;
   scene.transcription.legBubbles = true;
+  EXPECT_EQ(scene.solver.maxRefinements, 3);  // the default
+  scene.solver.maxRefinements = 0;
   const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
   ASSERT_TRUE(again.scene) << again.error;
   EXPECT_EQ(again.scene->solver.method, "ipopt");
   EXPECT_EQ(again.scene->frameRate, 30);
   EXPECT_TRUE(again.scene->transcription.legBubbles);
+  EXPECT_EQ(again.scene->solver.maxRefinements, 0);
   EXPECT_TRUE(again.scene->transcription.knots.empty());  // uniform: none written
   // The refinement's non-uniform knots (TranscriptionSpec::knots) round-trip exactly.
   scene.transcription.knots = {0.1, 0.35, 0.4125, 0.475, 0.6 + 1e-13};
@@ -187,6 +190,7 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, "[]", R"("gravity": [0, "down", 0],)"), "gravity[1]"},
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
       {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
+      {minimalWith(body, "[]", R"("solver": {"maxRefinements": 11},)"), "solver.maxRefinements': value 11"},
       {minimalWith(body, "[]", R"("transcription": {"knots": 0.5},)"), "transcription.knots': value 0.5"},
       {minimalWith(body, "[]", R"("transcription": {"knots": [0.5, 0.4]},)"),
        "transcription.knots[1]': value 0.4 is not allowed; expected a time at least 1e-4 s after the knot before it"},

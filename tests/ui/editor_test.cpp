@@ -882,6 +882,22 @@ class EditorTest : public QObject {
     doc.undoStack()->redo();
     QVERIFY(doc.showsSolutionOfScene());
     QCOMPARE(doc.motion(), motion);
+
+    // With "Most refinements" at 0 the scene's own transcription is the last word: the solve
+    // ends on it, not valid, and the scene stays as it is.
+    doc.undoStack()->undo();
+    auto* most = qobject_cast<QDoubleSpinBox*>(w.sceneSettings()->form()->editor("Most refinements"));
+    QVERIFY(most);
+    most->setValue(0);
+    QCOMPARE(doc.scene().solver.maxRefinements, 0);
+    const std::string unrefined = json(doc);
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(scaled(300000)));
+    QVERIFY2(doc.motion()->converged, qPrintable(w.statusText()));
+    QCOMPARE(doc.motion()->transcriptions.size(), size_t(1));
+    QVERIFY(!doc.motion()->transcriptions.front().valid);
+    QCOMPARE(json(doc), unrefined);
+    QVERIFY2(w.validity()->verdict().contains("fail"), qPrintable(w.validity()->verdict()));
   }
 
   // The graphs plot what the physics says they must: in flight the plotted centre of mass falls

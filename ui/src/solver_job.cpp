@@ -72,8 +72,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   ++alive_;
   QPointer<SolverJob> self(this);
   const int threadCount = threads, liveInterval = liveIntervalMs;
-  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount, liveInterval,
-                             refinement = refinement]() {
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount, liveInterval]() {
     // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
     // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
     // SCHED_IDLE runs it only on otherwise idle time; nice 15 alone was not enough once the
@@ -121,7 +120,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       // them all, and hands back the one whose motion it kept).
       const SpacetimeProblem* solving = problem.get();
       RefinedSolve solved = solveRefined(
-          std::move(problem), options, refinement,
+          std::move(problem), options, refinementOptionsFor(scene.solver),
           [&, lastLive = std::chrono::steady_clock::now()](const IterationReport& r) mutable {
             const auto now = std::chrono::steady_clock::now();
             if (now - lastLive < std::chrono::milliseconds(liveInterval)) return !run->cancel.load();

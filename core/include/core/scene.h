@@ -189,6 +189,10 @@ struct SolverSpec {
   // Keep every body's geometry above the ground outside its own contacts (automatic ground
   // clearances on each shape's lowest-point features; characters with a fixed root excepted).
   bool bodiesAboveGround = true;
+  // Finer transcriptions a solve may try after the scene's own when the motion fails its
+  // validity checks (solver/refinement.h); 0 turns the refinement off.
+  static constexpr int kMaxRefinements = 10;
+  int maxRefinements = 3;
 };
 
 // A solved motion saved with the scene so reopening shows it: the solver's variables and

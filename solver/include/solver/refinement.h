@@ -54,6 +54,9 @@ struct RefinementOptions {
   static constexpr double kSplitFraction = 0.5;
 };
 
+// The refinement a scene asks for (SolverSpec::maxRefinements).
+RefinementOptions refinementOptionsFor(const SolverSpec& spec);
+
 // One transcription the solve ran on, and how that solve ended.
 struct TranscriptionAttempt {
   double controlPointsPerSecond = 0;

@@ -4,7 +4,7 @@
 // atomic flag the solver checks every iteration. Starting a new solve while one runs cancels
 // the old one, whose late results are dropped - that is auto-solve while dragging.
 // The solve refines its transcription where the motion fails its validity checks, as the
-// command line's does (solveRefined): the result carries the transcriptions it tried and is
+// command line's does (solveRefined, up to the scene's solver.maxRefinements): the result carries the transcriptions it tried and is
 // checked already, and the document adopts the finer transcription (Document::acceptResult).
 #pragma once
 
@@ -48,8 +48,6 @@ class SolverJob : public QObject {
   // the solver's 10 reports a second, and a luxo_jump solve took 26 s in the editor against
   // 6 s alone (measured with `spacetime --screenshot`, `perf record`).
   int liveIntervalMs = 250;
-  // How far a solve may refine the transcription when its motion fails the validity checks.
-  RefinementOptions refinement;
 
  signals:
   void iterate(std::shared_ptr<const spacetime::ui::SolvedMotion> motion);
