@@ -827,9 +827,13 @@ class EditorTest : public QObject {
     doc.edit("Three samples per segment", [](Scene& s) { s.transcription.samplesPerSegment = 3; });
     const std::string coarse = json(doc);
     const int commands = doc.undoStack()->count();
-    bool liveOnKnots = false;  // an iterate of the refined transcription was shown while it ran
+    // An iterate of the refined transcription is shown while it runs, and the status says so.
+    bool liveOnKnots = false;
+    QString statusOnKnots;
     connect(w.solverJob(), &SolverJob::iterate, this, [&](std::shared_ptr<const SolvedMotion> m) {
-      liveOnKnots = liveOnKnots || (m->scene && !m->scene->transcription.knots.empty());
+      if (!m->scene || m->scene->transcription.knots.empty()) return;
+      liveOnKnots = true;
+      statusOnKnots = w.statusText();
     });
     w.solve();
     QVERIFY(w.solverJob()->waitForFinished(scaled(300000)));
@@ -844,6 +848,8 @@ class EditorTest : public QObject {
     const TranscriptionSpec& refined = doc.scene().transcription;
     QVERIFY(!refined.knots.empty());
     QCOMPARE(refined.samplesPerSegment, RefinementOptions::kMaxRefinedSamples);
+    QVERIFY2(statusOnKnots.contains(QString("on a finer transcription: %1 segments, s = 8").arg(refined.knots.size() + 1)),
+             qPrintable(statusOnKnots));
     QCOMPARE(doc.undoStack()->count(), commands + 1);
     QCOMPARE(doc.undoStack()->undoText(), QString("Refine the transcription"));
     QVERIFY2(doc.undoStack()->text(commands).contains("segments split from 20 control points per second"),

@@ -39,6 +39,11 @@ namespace {
 QString autosaveDirectory() {
   return QStandardPaths::writableLocation(QStandardPaths::AppLocalDataLocation) + "/autosave";
 }
+
+bool sameTranscription(const TranscriptionSpec& a, const TranscriptionSpec& b) {
+  return a.controlPointsPerSecond == b.controlPointsPerSecond && a.samplesPerSegment == b.samplesPerSegment &&
+         a.knots == b.knots && a.legBubbles == b.legBubbles;
+}
 }  // namespace
 
 MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
@@ -110,8 +115,21 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
 
   connect(&job_, &SolverJob::iterate, this, [this](std::shared_ptr<const SolvedMotion> m) {
     doc_.setMotion(m);
-    progress_->setText(tr("Solving… iteration %1 · objective %2 · violation %3")
-                           .arg(m->iterations).arg(m->objective, 0, 'g', 6).arg(m->maxViolation, 0, 'g', 3));
+    // The refinement solves again on a finer transcription: the status says so, and the
+    // progress towards the tolerance starts again there.
+    QString finer;
+    if (m->scene) {
+      const TranscriptionSpec& t = m->scene->transcription;
+      if (progressTranscription_ && !sameTranscription(*progressTranscription_, t))
+        progressEstimate_ = SolveProgress(doc_.scene().solver.tolerance);
+      progressTranscription_ = t;
+      if (!sameTranscription(t, doc_.scene().transcription))
+        finer = tr(" · on a finer transcription: %1 segments, s = %2")
+                    .arg(std::lround(t.segments(m->scene->startTime, m->scene->endTime)))
+                    .arg(t.samplesPerSegment);
+    }
+    progress_->setText(tr("Solving… iteration %1 · objective %2 · violation %3%4")
+                           .arg(m->iterations).arg(m->objective, 0, 'g', 6).arg(m->maxViolation, 0, 'g', 3).arg(finer));
     const double done = progressEstimate_.update(m->maxViolation);
     showSolveProgress(static_cast<int>(std::lround(1000 * done)),
                       tr("%1 % of the way to the tolerance").arg(std::lround(100 * done)));
@@ -449,6 +467,7 @@ void MainWindow::solve() {
   stopAction_->setEnabled(true);
   progress_->setText(tr("Solving…"));
   progressEstimate_ = SolveProgress(doc_.scene().solver.tolerance);
+  progressTranscription_.reset();
   showSolveProgress(0, tr("starting"));
   solveProgress_->show();
 }

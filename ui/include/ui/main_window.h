@@ -14,6 +14,7 @@
 #include <QTimer>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ui/builder_panel.h"
@@ -106,6 +107,8 @@ class MainWindow : public QMainWindow {
   QLabel* progress_;
   QProgressBar* solveProgress_ = nullptr;
   SolveProgress progressEstimate_{1e-7};
+  // The transcription of the last iterate shown: a refinement restarts the estimate.
+  std::optional<TranscriptionSpec> progressTranscription_;
   QMenu* recentMenu_ = nullptr;
   QAction* solveAction_ = nullptr;
   QAction* stopAction_ = nullptr;
