@@ -906,6 +906,40 @@ class EditorTest : public QObject {
     QVERIFY2(w.validity()->verdict().contains("fail"), qPrintable(w.validity()->verdict()));
   }
 
+  // The refined transcription goes only to the scene the solve was asked to solve: a rate typed
+  // while a solve ran (auto-solve off) is not overwritten by the refinement's when it ends.
+  void aRefinedResultIsAdoptedOnlyByTheSceneItSolved() {
+    Document doc;
+    QString error;
+    QVERIFY2(doc.open(":/scenes/luxo_jump.json", &error), qPrintable(error));
+    const Scene asked = doc.scene();
+    // A result on split knots (the default guess stands in for the solve: only the scenes matter).
+    Scene split = asked;
+    for (int k = 1; k < 24; ++k) split.transcription.knots.push_back(k / 20.0);
+    split.transcription.knots.insert(split.transcription.knots.begin() + 8, 0.425);
+    split.transcription.samplesPerSegment = 8;
+    std::string why;
+    const auto problem = SpacetimeProblem::build(split, &why);
+    QVERIFY2(problem, why.c_str());
+    auto result = sampleMotion(*problem);
+    result->solved = result->converged = true;
+    result->asked = std::make_shared<const Scene>(asked);
+
+    doc.edit("Rate", [](Scene& s) { s.transcription.controlPointsPerSecond = 25; });
+    const int commands = doc.undoStack()->count();
+    QVERIFY(doc.acceptResult(result));
+    QCOMPARE(doc.undoStack()->count(), commands);
+    QCOMPARE(doc.scene().transcription.controlPointsPerSecond, 25.0);
+    QVERIFY(doc.scene().transcription.knots.empty());
+
+    doc.undoStack()->undo();  // the scene the solve was asked to solve
+    QVERIFY(doc.acceptResult(result));
+    QCOMPARE(doc.scene().transcription.knots, split.transcription.knots);
+    QCOMPARE(doc.scene().transcription.samplesPerSegment, 8);
+    QCOMPARE(doc.undoStack()->undoText(), QString("Refine the transcription"));
+    QVERIFY(doc.showsSolutionOfScene());
+  }
+
   // The graphs plot what the physics says they must: in flight the plotted centre of mass falls
   // at g (its second difference on the 120 Hz frames), a body's plotted velocity is the
   // derivative of its plotted position, the plotted ground forces change the centre of mass's

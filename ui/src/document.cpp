@@ -78,8 +78,9 @@ void Document::remember(const std::shared_ptr<const SolvedMotion>& motion) {
 
 bool Document::acceptResult(std::shared_ptr<const SolvedMotion> motion) {
   if (!motion || !motionFitsScene(*motion, scene_)) return false;  // a result of an older structure
-  if (motion->converged && motion->scene) {
-    // A solve of this scene that refined its transcription: the scene takes the finer one, as an
+  if (motion->converged && motion->scene && motion->asked && problemKey(*motion->asked) == problemKey(scene_)) {
+    // A solve of this very scene that refined its transcription (not of one edited since, whose
+    // new rate the refinement's would overwrite): the scene takes the finer transcription, as an
     // edit the user can undo, so that saving keeps the motion with the transcription it fits and
     // the next solve starts there. Remembered first, so the edit shows it as the scene's solution.
     Scene refined = scene_;

@@ -144,6 +144,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->reason = summary.reason;
       final->violated = summary.violated;
       final->transcriptions = solved.attempts;
+      final->asked = std::make_shared<const Scene>(snapshot);
       // The refinement checked the motion it kept; a solve stopped by the user was not (the
       // check stops with it), and is checked below, after the motion is on screen.
       if (!solved.validity.cancelled) final->validity = std::make_shared<const ValidityReport>(std::move(solved.validity));

@@ -22,6 +22,10 @@ struct SolvedMotion {
   // The scene `state` belongs to: after an edit that changes the problem's shape, the next
   // solve re-fits this motion instead of starting from the default guess.
   std::shared_ptr<const Scene> scene;
+  // The scene a final solve was asked to solve, when it differs from `scene` only in the
+  // transcription the refinement chose (null for iterates and guesses): the document adopts
+  // that transcription only while its scene is still this one.
+  std::shared_ptr<const Scene> asked;
   double objective = 0;
   double maxViolation = 0;
   int iterations = 0;
