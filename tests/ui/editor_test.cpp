@@ -940,6 +940,39 @@ class EditorTest : public QObject {
     QVERIFY(doc.showsSolutionOfScene());
   }
 
+  // When the finer transcription's solve ran out of time, the motion kept is the coarser one, and
+  // the validity panel says so instead of naming the finer transcription.
+  void validityPanelSaysWhichTranscriptionsMotionIsShown() {
+    Document doc;
+    QString error;
+    QVERIFY2(doc.open(":/scenes/luxo_jump.json", &error), qPrintable(error));
+    std::string why;
+    const auto problem = SpacetimeProblem::build(doc.scene(), &why);
+    QVERIFY2(problem, why.c_str());
+    auto result = sampleMotion(*problem);
+    result->solved = result->converged = true;
+    result->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));
+    TranscriptionAttempt coarse, finer;
+    coarse.controlPointsPerSecond = finer.controlPointsPerSecond = 20;
+    coarse.samplesPerSegment = 6;
+    coarse.segments = 24;
+    coarse.converged = true;
+    coarse.kept = true;
+    finer.samplesPerSegment = 8;
+    finer.segments = 30;
+    finer.nonUniform = true;
+    finer.status = SolveStatus::TimeLimit;
+    finer.why = "the motion at 20 control points per second, s = 6 failed the dense grid";
+    result->transcriptions = {coarse, finer};
+    ValidityPanel panel(&doc);
+    QVERIFY(doc.acceptResult(result));
+    QVERIFY2(panel.verdict().contains("refined the transcription once, because the motion at 20 control points per "
+                                      "second, s = 6 failed the dense grid; the solve at 30 segments split from 20 "
+                                      "control points per second, s = 8 stopped (time limit), so this motion is the "
+                                      "one at 20 control points per second, s = 6."),
+             qPrintable(panel.verdict()));
+  }
+
   // The graphs plot what the physics says they must: in flight the plotted centre of mass falls
   // at g (its second difference on the 120 Hz frames), a body's plotted velocity is the
   // derivative of its plotted position, the plotted ground forces change the centre of mass's

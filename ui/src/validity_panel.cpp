@@ -124,10 +124,19 @@ void ValidityPanel::rebuild() {
   // A solve that refined its transcription says why, and where the motion shown lives.
   const std::vector<TranscriptionAttempt>& tried = motion->transcriptions;
   const auto kept = std::find_if(tried.begin(), tried.end(), [](const TranscriptionAttempt& a) { return a.kept; });
-  if (tried.size() > 1 && kept != tried.end())
-    verdict += tr(" The solve refined the transcription %1, because %2; this motion is at %3.")
+  if (tried.size() > 1 && kept != tried.end()) {
+    verdict += tr(" The solve refined the transcription %1, because %2; ")
                    .arg(tried.size() == 2 ? tr("once") : tr("%1 times").arg(tried.size() - 1),
-                        QString::fromStdString(tried[1].why), QString::fromStdString(describeResolution(*kept)));
+                        QString::fromStdString(tried[1].why));
+    // The finest transcription's motion is not always the one kept: its solve may have run out
+    // of time or stalled further from the constraints.
+    const TranscriptionAttempt& last = tried.back();
+    verdict += last.kept ? tr("this motion is at %1.").arg(QString::fromStdString(describeResolution(last)))
+                         : tr("the solve at %1 stopped (%2), so this motion is the one at %3.")
+                               .arg(QString::fromStdString(describeResolution(last)),
+                                    QString::fromStdString(last.converged ? "converged, not valid" : toString(last.status)),
+                                    QString::fromStdString(describeResolution(*kept)));
+  }
   // After an edit the motion on screen is still the last solve's, checked against its own scene.
   if (motion->scene && sceneToJson(*motion->scene) != sceneToJson(doc_->scene()))
     verdict = tr("The scene changed since this solve; these checks are of the solved scene. ") + verdict;
