@@ -51,7 +51,8 @@ constexpr const char* kHelp =
     "  --urdf-z-up        URDF files Z-up (the scene turned +90 degrees about X), so tools'\n"
     "                     default gravity along -Z is the scene's; default: Y-up as the scene\n"
     "  --threads N        Ceres evaluation threads (default 2)\n"
-    "  --max-seconds S    wall-clock budget of the solve (default 300)\n"
+    "  --max-seconds S    wall-clock budget of the solve (default: the scene's solver.maxSeconds,\n"
+    "                     else 300)\n"
     "  --quiet            no progress on stderr\n"
     "  --no-polish        the augmented Lagrangian without the Newton polish\n"
     "  --method M         al: augmented Lagrangian with Newton polish; ipopt: IPOPT's interior\n"
@@ -102,7 +103,7 @@ int run(int argc, char** argv) {
   // Ceres evaluates residual blocks on `threads` threads (kernels are thread-safe). 2 suits this
   // 2-core machine; a render farm running one solve per core wants 1.
   int threads = 2;
-  double maxSeconds = SolverOptions{}.maxSeconds;  // the whole solve's wall-clock budget
+  double maxSeconds = -1;  // --max-seconds: overrides the scene's solver.maxSeconds
   bool quiet = false;
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
   int maxRefinements = -1;  // --max-refinements: overrides the scene's solver.maxRefinements
@@ -186,7 +187,7 @@ int run(int argc, char** argv) {
   if (!gltfRateGiven) outputs.gltfRate = loaded.scene->frameRate;
   SolverOptions options = solverOptionsFor(loaded.scene->solver);
   options.threads = threads;
-  options.maxSeconds = maxSeconds;
+  if (maxSeconds > 0) options.maxSeconds = maxSeconds;
   // In budget seconds: an instrumented build's stretched budget counts its setup stretched too.
   options.spentSeconds = budgetSecondsSince(started);
   options.newtonPolish = polish;

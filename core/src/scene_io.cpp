@@ -540,7 +540,7 @@ Scene readScene(const Reader& r, const json& root) {
   if (root.contains("solver")) {
     const json& t = root["solver"];
     r.allowKeys(t, "solver", {"method", "maxOuterIterations", "maxInnerIterations", "tolerance", "maxPenalty",
-                                  "bodiesAboveGround", "maxRefinements"});
+                                  "bodiesAboveGround", "maxRefinements", "maxSeconds"});
     if (t.contains("method")) {
       s.solver.method = r.string(t["method"], "solver.method");
       if (std::find(std::begin(SolverSpec::kMethods), std::end(SolverSpec::kMethods), s.solver.method) ==
@@ -549,6 +549,11 @@ Scene readScene(const Reader& r, const json& root) {
     }
     if (t.contains("bodiesAboveGround"))
       s.solver.bodiesAboveGround = r.boolean(t["bodiesAboveGround"], "solver.bodiesAboveGround");
+    if (t.contains("maxSeconds")) {
+      s.solver.maxSeconds = r.positive(t["maxSeconds"], "solver.maxSeconds");
+      if (s.solver.maxSeconds > SolverSpec::kMaxSeconds)
+        r.badValue("solver.maxSeconds", t["maxSeconds"], "a number of seconds in (0, 1e7]");
+    }
     if (t.contains("maxRefinements"))
       s.solver.maxRefinements =
           r.integer(t["maxRefinements"], "solver.maxRefinements", 0, SolverSpec::kMaxRefinements);
@@ -849,7 +854,8 @@ std::string sceneToJson(const Scene& s) {
                     {"tolerance", s.solver.tolerance},
                     {"maxPenalty", s.solver.maxPenalty},
                     {"bodiesAboveGround", s.solver.bodiesAboveGround},
-                    {"maxRefinements", s.solver.maxRefinements}};
+                    {"maxRefinements", s.solver.maxRefinements},
+                    {"maxSeconds", s.solver.maxSeconds}};
   json chars = json::array();
   for (const auto& c : s.characters) {
     json jc;

@@ -92,6 +92,7 @@ SolverOptions solverOptionsFor(const SolverSpec& spec) {
   options.maxInnerIterations = spec.maxInnerIterations;
   options.tolerance = spec.tolerance;
   options.maxPenalty = spec.maxPenalty;
+  options.maxSeconds = spec.maxSeconds;
   parseSolverMethod(spec.method, &options.method);  // the loader accepts only known names
   return options;
 }

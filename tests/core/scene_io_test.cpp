@@ -64,12 +64,15 @@ TEST(SceneIo, SolverMethodFrameRateLegBubblesAndKnotsRoundTrip) {
   scene.transcription.legBubbles = true;
   EXPECT_EQ(scene.solver.maxRefinements, 3);  // the default
   scene.solver.maxRefinements = 0;
+  EXPECT_EQ(scene.solver.maxSeconds, 300);  // the default
+  scene.solver.maxSeconds = 1200.5;
   const SceneLoadResult again = parseScene(sceneToJson(scene), "roundtrip");
   ASSERT_TRUE(again.scene) << again.error;
   EXPECT_EQ(again.scene->solver.method, "ipopt");
   EXPECT_EQ(again.scene->frameRate, 30);
   EXPECT_TRUE(again.scene->transcription.legBubbles);
   EXPECT_EQ(again.scene->solver.maxRefinements, 0);
+  EXPECT_EQ(again.scene->solver.maxSeconds, 1200.5);
   EXPECT_TRUE(again.scene->transcription.knots.empty());  // uniform: none written
   // The refinement's non-uniform knots (TranscriptionSpec::knots) round-trip exactly.
   scene.transcription.knots = {0.1, 0.35, 0.4125, 0.475, 0.6 + 1e-13};
@@ -191,6 +194,8 @@ TEST(SceneIo, BadFilesNameFileFieldAndValue) {
       {minimalWith(body, "[]", R"("solver": {"maxPenalty": 10},)"), "solver.maxPenalty': value 10"},
       {minimalWith(body, "[]", R"("solver": {"bodiesAboveGround": 1},)"), "solver.bodiesAboveGround': value 1"},
       {minimalWith(body, "[]", R"("solver": {"maxRefinements": 11},)"), "solver.maxRefinements': value 11"},
+      {minimalWith(body, "[]", R"("solver": {"maxSeconds": 0},)"), "solver.maxSeconds': value 0"},
+      {minimalWith(body, "[]", R"("solver": {"maxSeconds": 2e7},)"), "solver.maxSeconds': value 2"},
       {minimalWith(body, "[]", R"("transcription": {"knots": 0.5},)"), "transcription.knots': value 0.5"},
       {minimalWith(body, "[]", R"("transcription": {"knots": [0.5, 0.4]},)"),
        "transcription.knots[1]': value 0.4 is not allowed; expected a time at least 1e-4 s after the knot before it"},

@@ -89,6 +89,8 @@ SceneSettingsPanel::SceneSettingsPanel(Document* doc, QWidget* parent)
               [](Scene& s, int v) { s.solver.method = SolverSpec::kMethods[v]; });
   f.addDouble(tr("Solver tolerance"), [](const Scene& s) { return s.solver.tolerance; },
               [](Scene& s, double v) { s.solver.tolerance = v; }, 1e-10, 1e-2, 1e-7, 10);
+  f.addDouble(tr("Time budget"), [](const Scene& s) { return s.solver.maxSeconds; },
+              [](Scene& s, double v) { s.solver.maxSeconds = v; }, 1, SolverSpec::kMaxSeconds, 60, 0, tr(" s"));
   f.addDouble(tr("Most refinements"), [](const Scene& s) { return double(s.solver.maxRefinements); },
               [](Scene& s, double v) { s.solver.maxRefinements = static_cast<int>(v); }, 0, SolverSpec::kMaxRefinements, 1, 0);
   f.addDouble(tr("Most multiplier updates"), [](const Scene& s) { return double(s.solver.maxOuterIterations); },

@@ -193,6 +193,9 @@ struct SolverSpec {
   // validity checks (solver/refinement.h); 0 turns the refinement off.
   static constexpr int kMaxRefinements = 10;
   int maxRefinements = 3;
+  // Wall-clock budget of a whole solve, its refinements included (s, at most kMaxSeconds).
+  static constexpr double kMaxSeconds = 1e7;
+  double maxSeconds = 300;
 };
 
 // A solved motion saved with the scene so reopening shows it: the solver's variables and
