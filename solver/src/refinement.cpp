@@ -105,7 +105,8 @@ bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& moti
 
 RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptions options,
                           const RefinementOptions& refinement, const ProgressCallback& callback,
-                          const std::atomic<bool>* cancel, const TranscriptionCallback& starting) {
+                          const std::atomic<bool>* cancel, const TranscriptionCallback& starting,
+                          const TranscriptionSolvedCallback& solvedCallback) {
   const Clock::time_point start = Clock::now();
   const double spentBefore = options.spentSeconds;
   RefinedSolve best;
@@ -157,6 +158,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.interiorPointSeconds += summary.interiorPointSeconds;
     total.jacobianSeconds += summary.jacobianSeconds;
     total.linearSolverSeconds += summary.linearSolverSeconds;
+    if (solvedCallback) solvedCallback(*problem, attempt, validity);
     const std::string failure = describe(attempt, checks);
     // A finer transcription's result replaces the best so far unless it is worse (a finer solve
     // that stalled never replaces a converged motion the user could already look at).

@@ -881,13 +881,26 @@ class EditorTest : public QObject {
     QCOMPARE(back.size(), motion->state.variables.size());
     for (size_t i = 0; i < back.size(); ++i) QVERIFY(std::abs(back[i] - motion->state.variables[i]) < 1e-12);
 
-    // Undo returns to the scene's own transcription; redo brings the refined solution back.
+    // Undo returns to the scene's own transcription and shows the motion the solve reached there,
+    // with its failed report: that scene's solution, so auto-solve does not solve it again (it
+    // would refine again and drop the redo). Redo brings the refined solution back.
+    w.setAutoSolve(true);
     doc.undoStack()->undo();
     QCOMPARE(json(doc), coarse);
     QCOMPARE(segments->text(), QString("24, uniform"));
+    QVERIFY(motion->unrefined);
+    QCOMPARE(doc.motion(), motion->unrefined);
+    QVERIFY(doc.showsSolutionOfScene());
+    QCOMPARE(doc.motion()->scene->transcription.samplesPerSegment, 3);
+    QCOMPARE(doc.motion()->objective, motion->transcriptions.front().objective);
+    QVERIFY2(w.validity()->verdict().contains("fail"), qPrintable(w.validity()->verdict()));
+    QTest::qWait(50);
+    QVERIFY(!w.solverJob()->isRunning());
+    QVERIFY(doc.undoStack()->canRedo());
     doc.undoStack()->redo();
     QVERIFY(doc.showsSolutionOfScene());
     QCOMPARE(doc.motion(), motion);
+    w.setAutoSolve(false);
 
     // With "Most refinements" at 0 the scene's own transcription is the last word: the solve
     // ends on it, not valid, and the scene stays as it is.
@@ -938,6 +951,20 @@ class EditorTest : public QObject {
     QCOMPARE(doc.scene().transcription.samplesPerSegment, 8);
     QCOMPARE(doc.undoStack()->undoText(), QString("Refine the transcription"));
     QVERIFY(doc.showsSolutionOfScene());
+
+    // The same refinement again after undoing it and an edit made on it (a re-solve of the undone
+    // scene): it is redone, and the edit stays on the redo stack.
+    doc.edit("Gravity", [](Scene& s) { s.gravity.y() = -9.7; });
+    const int after = doc.undoStack()->count();
+    doc.undoStack()->undo();
+    doc.undoStack()->undo();
+    QCOMPARE(doc.scene().transcription.samplesPerSegment, asked.transcription.samplesPerSegment);
+    QVERIFY(doc.acceptResult(result));
+    QCOMPARE(doc.undoStack()->count(), after);
+    QCOMPARE(doc.undoStack()->index(), after - 1);
+    QCOMPARE(doc.scene().transcription.knots, split.transcription.knots);
+    QCOMPARE(doc.undoStack()->redoText(), QString("Gravity"));
+    QCOMPARE(doc.motion(), std::shared_ptr<const SolvedMotion>(result));
   }
 
   // When the finer transcription's solve ran out of time, the motion kept is the coarser one, and

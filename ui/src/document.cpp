@@ -87,9 +87,20 @@ bool Document::acceptResult(std::shared_ptr<const SolvedMotion> motion) {
     refined.transcription = motion->scene->transcription;
     const std::string key = problemKey(refined);
     if (key == problemKey(*motion->scene) && key != problemKey(scene_)) {
+      // The motion at the scene's own transcription is that scene's solution: undo shows it.
+      remember(motion->unrefined);
       remember(motion);
       lastGood_ = motion;
       stopped_.reset();
+      // The same refinement undone before (a re-solve of the undone scene refined it again): redo
+      // it rather than push a copy, which would drop the rest of the redo stack.
+      if (undo_.index() < undo_.count()) {
+        const auto* next = dynamic_cast<const EditScene*>(undo_.command(undo_.index()));
+        if (next && problemKey(next->before()) == problemKey(scene_) && problemKey(next->after()) == key) {
+          undo_.redo();
+          return true;
+        }
+      }
       const auto kept = std::find_if(motion->transcriptions.begin(), motion->transcriptions.end(),
                                      [](const TranscriptionAttempt& a) { return a.kept; });
       // The undo view's text says to what; the Undo action's (after the newline) stays short.

@@ -488,7 +488,8 @@ void MainWindow::stopSolve() { job_.cancel(); }
 void MainWindow::setAutoSolve(bool on) {
   autoSolve_ = on;
   if (autoSolveAction_->isChecked() != on) autoSolveAction_->setChecked(on);
-  if (on) solve();
+  // A motion that already solves the scene would only be found again.
+  if (on && !doc_.showsSolutionOfScene()) solve();
 }
 
 bool MainWindow::exportMotionJson(const QString& path, QString* error) {

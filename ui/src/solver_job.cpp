@@ -119,6 +119,9 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       // transcription the refinement solves when a motion fails its checks (solveRefined owns
       // them all, and hands back the one whose motion it kept).
       const SpacetimeProblem* solving = problem.get();
+      // The converged motion at the scene's own transcription, kept in case a finer one replaces it.
+      std::shared_ptr<SolvedMotion> unrefined;
+      int transcriptionsSolved = 0;
       RefinedSolve solved = solveRefined(
           std::move(problem), options, refinementOptionsFor(scene.solver),
           [&, lastLive = std::chrono::steady_clock::now()](const IterationReport& r) mutable {
@@ -132,7 +135,19 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
             post(run, motion);
             return !run->cancel.load();
           },
-          &run->cancel, [&](const SpacetimeProblem& next) { solving = &next; });
+          &run->cancel, [&](const SpacetimeProblem& next) { solving = &next; },
+          [&](const SpacetimeProblem& p, const TranscriptionAttempt& attempt, const ValidityReport& report) {
+            if (transcriptionsSolved++ > 0 || !attempt.converged || attempt.valid) return;
+            unrefined = sampleMotion(p);
+            unrefined->objective = attempt.objective;
+            unrefined->maxViolation = attempt.maxViolation;
+            unrefined->iterations = attempt.iterations;
+            unrefined->solved = unrefined->converged = true;
+            unrefined->reason = "converged at the scene's transcription, before the solve refined it";
+            unrefined->transcriptions = {attempt};
+            unrefined->transcriptions.front().kept = true;
+            unrefined->validity = std::make_shared<const ValidityReport>(report);
+          });
       problem = std::move(solved.problem);
       const SolverSummary summary = solved.summary;
       auto final = sampleMotion(*problem);
@@ -145,6 +160,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       final->violated = summary.violated;
       final->transcriptions = solved.attempts;
       final->asked = std::make_shared<const Scene>(snapshot);
+      if (!solved.attempts.empty() && !solved.attempts.front().kept) final->unrefined = std::move(unrefined);
       // The refinement checked the motion it kept; a solve stopped by the user was not (the
       // check stops with it), and is checked below, after the motion is on screen.
       if (!solved.validity.cancelled) final->validity = std::make_shared<const ValidityReport>(std::move(solved.validity));

@@ -93,6 +93,11 @@ std::string describeResolution(const TranscriptionAttempt& attempt);
 // the scene's own, then each finer one, already started from the best motion so far. A live
 // view samples the iterates of this problem: the finer ones are not the problem it passed in.
 using TranscriptionCallback = std::function<void(const SpacetimeProblem&)>;
+// Called (from the solving thread) after each transcription's solve and check, with its problem
+// (holding the motion it reached), what came of it and its validity report: an editor keeps the
+// motion at the scene's own transcription this way, so undoing the refinement shows it again.
+using TranscriptionSolvedCallback =
+    std::function<void(const SpacetimeProblem&, const TranscriptionAttempt&, const ValidityReport&)>;
 
 // The next finer transcription after `spec`: `growth` times its rate, at most the cap, uniform
 // again, and at least kMaxRefinedSamples; false when its rate is at the cap already.
@@ -109,10 +114,11 @@ bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& moti
 
 // Solves `problem` (built from its scene) and refines as above. The progress callback and cancel
 // flag apply to every solve; options.maxSeconds bounds them all together; `starting` hears of
-// each transcription before its solve. The returned problem is
+// each transcription before its solve and `solved` after it. The returned problem is
 // `problem` itself when no refinement ran.
 RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptions options,
                           const RefinementOptions& refinement, const ProgressCallback& callback = nullptr,
-                          const std::atomic<bool>* cancel = nullptr, const TranscriptionCallback& starting = nullptr);
+                          const std::atomic<bool>* cancel = nullptr, const TranscriptionCallback& starting = nullptr,
+                          const TranscriptionSolvedCallback& solved = nullptr);
 
 }  // namespace spacetime

@@ -64,7 +64,8 @@ class Document : public QObject {
   // when there is no converged motion that fits the scene to keep showing; otherwise the last
   // converged motion stays (or comes back, after the live iterates) and the stopped one is kept
   // as stoppedMotion(). A converged motion of this scene on a transcription the solve refined
-  // also sets the scene's transcription to it, as one undo command ("Refine the transcription").
+  // also sets the scene's transcription to it, as one undo command ("Refine the transcription"),
+  // and remembers the motion it reached at the scene's own transcription (undo shows it).
   // Returns whether `motion` is on show.
   bool acceptResult(std::shared_ptr<const SolvedMotion> motion);
   // The last result that stopped without converging and was not put on show (null when none).
@@ -147,6 +148,8 @@ class EditScene : public QUndoCommand {
   void redo() override;
   int id() const override { return mergeId_; }
   bool mergeWith(const QUndoCommand* other) override;
+  const Scene& before() const { return before_; }
+  const Scene& after() const { return after_; }
 
  private:
   Document* doc_;

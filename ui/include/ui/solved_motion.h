@@ -38,6 +38,10 @@ struct SolvedMotion {
   // The transcriptions a final solve ran on, the scene's first (solver/refinement.h): more than
   // one when it refined the transcription because a coarser motion failed its checks.
   std::vector<TranscriptionAttempt> transcriptions;
+  // When a final motion is on a refined transcription: the motion the solve converged to at the
+  // scene's own transcription (with its failed report), or null when that solve did not converge.
+  // Undoing the refinement shows it again instead of solving the scene once more.
+  std::shared_ptr<const SolvedMotion> unrefined;
   // The validity report of a final or loaded solution (null for iterates and guesses): is the
   // motion physical between the samples too?
   std::shared_ptr<const ValidityReport> validity;
