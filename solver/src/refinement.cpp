@@ -85,14 +85,18 @@ bool refineWhereResidual(const TranscriptionSpec& spec, const CubicBSpline& moti
       static_cast<int>(report.segmentResidualDense.size()) != segments)
     return false;
   const double shortest = 2 / options.maxControlPointsPerSecond;  // two intervals at the cap
+  // Knots on a nanosecond grid: the uniform breakpoints start + k h carry rounding (0.05 comes out
+  // as 0.049999999999999996), which scene.json would keep digit for digit. Moving a knot by at
+  // most 5e-10 s changes nothing the solve can see.
+  const auto onGrid = [](double t) { return std::round(t * 1e9) / 1e9; };
   std::vector<double> knots;
   int split = 0;
   for (int k = 0; k < segments; ++k) {
     const double a = motion.knot(k), h = motion.segmentLength(k);
-    if (k > 0) knots.push_back(a);
+    if (k > 0) knots.push_back(onGrid(a));
     if (report.segmentResidualDense[static_cast<size_t>(k)] > RefinementOptions::kSplitFraction * kDenseResidualLimit &&
         h >= shortest * (1 - 1e-9)) {
-      knots.push_back(a + h / 2);
+      knots.push_back(onGrid(a + h / 2));
       ++split;
     }
   }

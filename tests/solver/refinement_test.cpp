@@ -80,6 +80,8 @@ TEST(Refinement, SegmentsAreSplitWhereTheDenseResidualIsLarge) {
   EXPECT_NEAR(finer.knots[7], 0.375, 1e-12);
   EXPECT_NEAR(finer.knots[9], 0.425, 1e-12);
   EXPECT_TRUE(std::is_sorted(finer.knots.begin(), finer.knots.end()));
+  // Without the rounding of start + k h (0.049999999999999996 for 0.05): scene.json keeps them.
+  for (double t : finer.knots) EXPECT_EQ(t, std::round(t * 1000) / 1000) << "a knot with rounding noise";
   // The uniform refinement after it starts from the rate again.
   TranscriptionSpec uniform;
   ASSERT_TRUE(refineTranscription(finer, options, &uniform));
