@@ -1,7 +1,7 @@
 // spacetime: the editor.
 //
 //   spacetime [SCENE.json]                       opens the editor (default: the Luxo jump)
-//   spacetime --screenshot FILE [SCENE.json]     solves, renders the window to FILE, exits
+//   spacetime --screenshot FILE [SCENE.json]     solves (within the scene's time budget), renders the window to FILE, exits
 //             [--size WxH] [--time T]            window size; the time shown (default: mid-clip)
 //             [--panel NAME]                     a tabbed panel to bring to the front (e.g. Scene)
 //
@@ -13,6 +13,7 @@
 #include <QMessageBox>
 #include <QThread>
 #include <QTimer>
+#include <algorithm>
 #include <cstdio>
 
 #include "ui/main_window.h"
@@ -54,7 +55,9 @@ int main(int argc, char** argv) {
   // Screenshot mode: solve (unless the file holds a solution), show the chosen time, grab.
   if (!window.document()->motion() || !window.document()->motion()->solved) {
     window.solve();
-    window.solverJob()->waitForFinished(600000);
+    // As long as the scene's time budget allows the solve, and a minute to check and hand over.
+    const double budget = window.document()->scene().solver.maxSeconds + 60;
+    window.solverJob()->waitForFinished(static_cast<int>(std::min(budget, 2e6) * 1000));
   }
   const spacetime::Scene& s = window.document()->scene();
   window.document()->setCurrentTime(parser.isSet(time) ? parser.value(time).toDouble() : 0.5 * (s.startTime + s.endTime));
