@@ -139,21 +139,21 @@ void SpacetimeProblem::applyHeldStances(const DofGroup& g, int k, GroupBasis* gb
   if (slope) redirect(slope);
 }
 
-void SpacetimeProblem::settleHeldStances() {
+void SpacetimeProblem::settleHeldStances(std::vector<double>* x) const {
   for (const CharacterVariables& cv : characters_)
     for (const DofGroup& g : cv.groups) {
       if (g.poseOf.empty()) continue;
       const int n = static_cast<int>(g.dofs.size()), size = g.blockSize();
       for (size_t k = 0; k < g.poseOf.size(); ++k) {
         if (g.poseOf[k] < 0) continue;
-        double* data = x_.data() + g.offset + k * size;
-        const double* pose = x_.data() + g.offset + g.poseOf[k] * size;
+        double* data = x->data() + g.offset + k * size;
+        const double* pose = x->data() + g.offset + g.poseOf[k] * size;
         std::copy(pose, pose + n, data);
         std::fill(data + n, data + size, 0.0);
       }
       for (size_t k = 0; k < g.heldInterval.size(); ++k)
         if (g.heldInterval[k])
-          std::fill_n(x_.begin() + g.bubbleStart(static_cast<int>(k)), g.bubbleBlockSize(static_cast<int>(k)), 0.0);
+          std::fill_n(x->begin() + g.bubbleStart(static_cast<int>(k)), g.bubbleBlockSize(static_cast<int>(k)), 0.0);
     }
 }
 

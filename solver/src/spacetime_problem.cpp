@@ -630,7 +630,7 @@ bool SpacetimeProblem::assemble(std::string* error) {
   layoutHeldStances();
   x_.assign(size, 0.0);
   initialGuess();
-  settleHeldStances();
+  settleHeldStances(&x_);
   for (const FreeEnd& e : freeEnds_) x_[e.offset] = e.current;
 
   ceres::Problem::Options options;
@@ -1299,7 +1299,7 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
   }
   // Multipliers do not transfer (their rows differ), but the penalty does: it keeps the next
   // solve near the transferred motion instead of first relaxing the constraints.
-  settleHeldStances();
+  settleHeldStances(&x_);
   std::fill(al_.lambda.begin(), al_.lambda.end(), 0.0);
   if (matched > 0) al_.rho = std::max(al_.rho, previous.al_.rho);
   return matched;
@@ -1315,11 +1315,17 @@ SpacetimeProblem::WarmStart SpacetimeProblem::warmStartFrom(const Scene& source,
   return WarmStart::None;
 }
 
+SolutionState SpacetimeProblem::state() const {
+  SolutionState s{x_, al_.lambda, al_.rho};
+  settleHeldStances(&s.variables);
+  return s;
+}
+
 bool SpacetimeProblem::restore(const SolutionState& s) {
   if (s.variables.size() != x_.size() || s.multipliers.size() != al_.lambda.size()) return false;
   std::copy(s.variables.begin(), s.variables.end(), x_.begin());  // parameter blocks point into x_
   syncFreeEnds();
-  settleHeldStances();
+  settleHeldStances(&x_);
   al_.lambda = s.multipliers;
   if (s.rho > 0) al_.rho = s.rho;
   return true;

@@ -122,5 +122,22 @@ TEST(HeldStance, ContactsThatCannotFixTheRootLeaveItFree) {
   }
 }
 
+// A state reads the same as restoring it: its held copies of a stance's pose are the pose, at
+// rest, whatever moved the pose block since the last restore (noise here, a solve's steps in
+// the editor, which saves the state and compares it with the reopened scene's).
+TEST(HeldStance, AStateIsSettledLikeItsRestoredSelf) {
+  const auto p = randomised(testing::shippedScene("luxo_jump.json"));
+  ASSERT_TRUE(p);
+  const SolutionState s = p->state();
+  std::vector<double> raw = p->variables();
+  int moved = 0;
+  for (size_t i = 0; i < raw.size(); ++i) moved += raw[i] != s.variables[i];
+  EXPECT_GT(moved, 0);  // the noise moved the held copies away from their pose
+  ASSERT_TRUE(p->restore(s));
+  EXPECT_EQ(p->variables(), s.variables);
+  EXPECT_EQ(p->state().variables, s.variables);
+  EXPECT_EQ(expectStill(*p), 2);
+}
+
 }  // namespace
 }  // namespace spacetime

@@ -310,7 +310,10 @@ class SpacetimeProblem {
   enum class WarmStart { None, Exact, Refitted };
   WarmStart warmStartFrom(const Scene& source, const SolutionState& state);
 
-  SolutionState state() const { return {x_, al_.lambda, al_.rho}; }
+  // The variables with the held stances settled (settleHeldStances), so a state reads the same
+  // as restoring it: a solve's steps move a stance's pose block, not the held copies no term
+  // reads, which would otherwise lag behind by the pose's last step (up to 6.3e-9 measured).
+  SolutionState state() const;
   // Restores a state of the same problem shape; false if the shapes differ.
   bool restore(const SolutionState& s);
 
@@ -379,9 +382,9 @@ class SpacetimeProblem {
   // side to its lift-off): rows saying the root is at rest there hold by construction, with a
   // zero Jacobian, and are left out (a KKT system cannot have them).
   bool rootHeldAt(int character, double t) const;
-  // Moves held breakpoints' data to their stance's pose (velocities and bubbles zero), so the
-  // variables read the same through any path.
-  void settleHeldStances();
+  // Moves held breakpoints' data in `x` (this problem's layout) to their stance's pose
+  // (velocities and bubbles zero), so the variables read the same through any path.
+  void settleHeldStances(std::vector<double>* x) const;
   // The velocities of each stance's pose block stay constant (zero) in the Ceres problem.
   void fixHeldVelocities();
   // Redirects a Hermite basis on interval k to the stances' poses.
