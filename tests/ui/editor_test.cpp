@@ -41,6 +41,7 @@
 #include "solver/augmented_lagrangian.h"
 #include "solver/interior_point.h"
 #include "solver/spacetime_problem.h"
+#include "ui/live_pacing.h"
 #include "ui/main_window.h"
 #include "ui/render_scene.h"
 #include "ui/solved_motion.h"
@@ -1443,6 +1444,31 @@ class EditorTest : public QObject {
     QVERIFY2(w.validity()->verdict().startsWith("Physically valid"), qPrintable(w.validity()->verdict()));
     QVERIFY(!doc.motion()->validity->flights.empty());
     QVERIFY(doc.motion()->validity->flights[0].maxRootLift >= 0.05);
+  }
+
+  // Live iterates come every 250 ms while the solver thread gets its core, and less often (up to
+  // every 2 s) while drawing them takes more than a quarter of it (a software renderer): the
+  // interval doubles below a 0.75 share of the wall-clock time, halves above 0.9, else stays.
+  void livePacingBacksOffWhileDrawingStarvesTheSolver() {
+    LivePacing pacing(0.25, 2.0);
+    pacing.start(10.0, 3.0);
+    QVERIFY(!pacing.due(10.2, 3.2));
+    QVERIFY(pacing.due(10.25, 3.25));  // a full core: stays at the shortest
+    QCOMPARE(pacing.interval(), 0.25);
+    double wall = 10.25, cpu = 3.25;
+    std::vector<double> intervals;
+    auto step = [&](double share) {
+      QVERIFY(!pacing.due(wall + 0.99 * pacing.interval(), cpu));
+      wall += pacing.interval();
+      cpu += share * pacing.interval();
+      QVERIFY(pacing.due(wall, cpu));
+      intervals.push_back(pacing.interval());
+    };
+    for (int i = 0; i < 5; ++i) step(0.3);  // the renderer takes 70 % of the solver's core
+    step(0.8);                               // between the thresholds: no change
+    for (int i = 0; i < 4; ++i) step(1.0);  // drawing became cheap again
+    const std::vector<double> expected{0.5, 1.0, 2.0, 2.0, 2.0, 2.0, 1.0, 0.5, 0.25, 0.25};
+    QCOMPARE(intervals, expected);
   }
 
   // While a solve runs, a progress bar in the status bar estimates how far it has come: the

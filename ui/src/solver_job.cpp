@@ -11,11 +11,27 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <ctime>
 #include <thread>
 
 #include "core/scene_io.h"
+#include "ui/live_pacing.h"
 
 namespace spacetime::ui {
+namespace {
+
+double wallSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// The CPU time the calling thread has run (the solver's share of the cores, for LivePacing).
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+}  // namespace
 
 struct SolverJob::Run {
   int generation = 0;
@@ -122,12 +138,13 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       // The converged motion at the scene's own transcription, kept in case a finer one replaces it.
       std::shared_ptr<SolvedMotion> unrefined;
       int transcriptionsSolved = 0;
+      // Live iterates as often as the interface's drawing leaves the solver enough of the CPU.
+      LivePacing pacing(liveInterval * 1e-3);
+      pacing.start(wallSeconds(), threadCpuSeconds());
       RefinedSolve solved = solveRefined(
           std::move(problem), options, refinementOptionsFor(scene.solver),
-          [&, lastLive = std::chrono::steady_clock::now()](const IterationReport& r) mutable {
-            const auto now = std::chrono::steady_clock::now();
-            if (now - lastLive < std::chrono::milliseconds(liveInterval)) return !run->cancel.load();
-            lastLive = now;
+          [&](const IterationReport& r) {
+            if (!pacing.due(wallSeconds(), threadCpuSeconds())) return !run->cancel.load();
             auto motion = sampleMotion(*solving);
             motion->objective = r.objective;
             motion->maxViolation = r.maxViolation;

@@ -44,9 +44,7 @@ class SolverJob : public QObject {
   // interface, which must never stall while the solver runs.
   int threads = 1;
   // Shortest time between two live iterates handed to the interface. Drawing one costs whole-
-  // window composites; under Xvfb's software renderer its threads took 1.5 of the 2 cores at
-  // the solver's 10 reports a second, and a luxo_jump solve took 26 s in the editor against
-  // 6 s alone (measured with `spacetime --screenshot`, `perf record`).
+  // window composites; the interval grows up to 2 s while that starves the solver (LivePacing).
   int liveIntervalMs = 250;
 
  signals:
