@@ -9,9 +9,10 @@
 #   scripts/measure.sh benchmarks the benchmarks only
 #   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 20 minutes)
 #   scripts/measure.sh characters the methods on the biped, the quadruped and the humanoid only
+#   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli > /dev/null
+cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli spacetime > /dev/null
 bench=build/tests/benchmarks
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -68,6 +69,26 @@ PY
 }
 [ "${1:-}" = methods ] && { methods_tables; exit 0; }
 [ "${1:-}" = characters ] && { characters_table; exit 0; }
+
+# The editor solving with its window shown and drawing iterates (spacetime --screenshot under
+# Xvfb, Mesa llvmpipe; single runs): the README's and docs/design.md's editor solve times.
+editor_solves() {
+  echo
+  echo "## The editor's solves (spacetime --screenshot under Xvfb, window shown, single runs)"
+  echo
+  echo "| scene | solve | objective | wall time of the run |"
+  echo "|---|---|---|---|"
+  python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); s["transcription"]["samplesPerSegment"] = 3; json.dump(s, open(sys.argv[2], "w"))' \
+    resources/scenes/luxo_jump.json "$tmp/luxo_jump_s3.json"
+  for scene in "$tmp/luxo_jump_s3.json" tests/scenes/ladder/luxo_jump_1.2m.json; do
+    local start end line
+    start=$(date +%s.%N)
+    line=$(xvfb-run -a -s "-screen 0 1600x1000x24" build/app/spacetime --screenshot "$tmp/shot.png" "$scene" 2>&1 | grep "wrote" || true)
+    end=$(date +%s.%N)
+    echo "| $(basename "$scene" .json) | $(echo "$line" | grep -o '[A-Z][a-z]* after [0-9]* iterations ([0-9.]* s)') | $(echo "$line" | grep -o 'objective [0-9.]*' | cut -d' ' -f2) | $(python3 -c "print(f'{$end - $start:.1f} s')") |"
+  done
+}
+[ "${1:-}" = editor ] && { editor_solves; exit 0; }
 
 echo "## Solves from the default guess (solve_benchmark, medians of 5)"
 echo
@@ -147,6 +168,7 @@ for b in json.load(open(sys.argv[1]))["benchmarks"]:
         print(f"| {name} | {ms:.3g} ms |")
 PY
 [ "${1:-}" = benchmarks ] && exit 0
+editor_solves
 
 echo
 echo "## Scaling (solve_benchmark's Scaling rows, 2 threads, single runs)"
