@@ -141,8 +141,10 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       // Live iterates as often as the interface's drawing leaves the solver enough of the CPU.
       LivePacing pacing(liveInterval * 1e-3);
       pacing.start(wallSeconds(), threadCpuSeconds());
+      const RefinementOptions refinement = refinementOptionsFor(scene.solver);
+      const bool mayRefine = refinement.enabled && refinement.maxRefinements > 0;
       RefinedSolve solved = solveRefined(
-          std::move(problem), options, refinementOptionsFor(scene.solver),
+          std::move(problem), options, refinement,
           [&](const IterationReport& r) {
             if (!pacing.due(wallSeconds(), threadCpuSeconds())) return !run->cancel.load();
             auto motion = sampleMotion(*solving);
@@ -154,7 +156,8 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
           },
           &run->cancel, [&](const SpacetimeProblem& next) { solving = &next; },
           [&](const SpacetimeProblem& p, const TranscriptionAttempt& attempt, const ValidityReport& report) {
-            if (transcriptionsSolved++ > 0 || !attempt.converged || attempt.valid) return;
+            // With no refinement allowed this motion is the result itself: not sampled twice.
+            if (transcriptionsSolved++ > 0 || !mayRefine || !attempt.converged || attempt.valid) return;
             unrefined = sampleMotion(p);
             unrefined->objective = attempt.objective;
             unrefined->maxViolation = attempt.maxViolation;
