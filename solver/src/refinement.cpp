@@ -132,7 +132,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // vain). On a refined transcription, or where none is left, the interior point continues.
     TranscriptionSpec next;
     SolverOptions levelOptions = options;
-    if (level == 0 && refinement.enabled && refinement.maxRefinements > 0 &&
+    if (level == 0 && refinement.refines() &&
         refineTranscription(spec, refinement, &next, RefinementOptions::kStallRateGrowth))
       levelOptions.interiorPointAfterStall = false;
     if (starting) starting(*problem);

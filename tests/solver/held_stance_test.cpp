@@ -129,7 +129,7 @@ TEST(HeldStance, AStateIsSettledLikeItsRestoredSelf) {
   const auto p = randomised(testing::shippedScene("luxo_jump.json"));
   ASSERT_TRUE(p);
   const SolutionState s = p->state();
-  std::vector<double> raw = p->variables();
+  const std::vector<double> raw = p->variables();  // before restore overwrites them
   int moved = 0;
   for (size_t i = 0; i < raw.size(); ++i) moved += raw[i] != s.variables[i];
   EXPECT_GT(moved, 0);  // the noise moved the held copies away from their pose

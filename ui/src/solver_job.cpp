@@ -142,7 +142,6 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       LivePacing pacing(liveInterval * 1e-3);
       pacing.start(wallSeconds(), threadCpuSeconds());
       const RefinementOptions refinement = refinementOptionsFor(scene.solver);
-      const bool mayRefine = refinement.enabled && refinement.maxRefinements > 0;
       RefinedSolve solved = solveRefined(
           std::move(problem), options, refinement,
           [&](const IterationReport& r) {
@@ -157,7 +156,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
           &run->cancel, [&](const SpacetimeProblem& next) { solving = &next; },
           [&](const SpacetimeProblem& p, const TranscriptionAttempt& attempt, const ValidityReport& report) {
             // With no refinement allowed this motion is the result itself: not sampled twice.
-            if (transcriptionsSolved++ > 0 || !mayRefine || !attempt.converged || attempt.valid) return;
+            if (transcriptionsSolved++ > 0 || !refinement.refines() || !attempt.converged || attempt.valid) return;
             unrefined = sampleMotion(p);
             unrefined->objective = attempt.objective;
             unrefined->maxViolation = attempt.maxViolation;

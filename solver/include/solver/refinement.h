@@ -52,6 +52,9 @@ struct RefinementOptions {
   // Segments whose dense-grid residual is above this fraction of the limit are split
   // (refineWhereResidual), while they are fewer than the uniform refinement would add.
   static constexpr double kSplitFraction = 0.5;
+
+  // Whether any finer transcription may be tried at all.
+  bool refines() const { return enabled && maxRefinements > 0; }
 };
 
 // The refinement a scene asks for (SolverSpec::maxRefinements).

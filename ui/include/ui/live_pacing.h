@@ -6,8 +6,8 @@
 // iterate every 250 ms, 8.5 s with one a second, 6 s with none.
 //
 // So the interval adapts to the share of the wall-clock time the solver thread got since the
-// last iterate (its CPU time over the wall time): below `starved` the interval doubles, up to
-// `longest`; above `fed` it halves, down to `shortest`. With a GPU the share stays near one and
+// last iterate (its CPU time over the wall time): below kStarved the interval doubles, up to
+// the longest; above kFed it halves, down to the shortest. With a GPU the share stays near one and
 // the view keeps its 4 iterates a second.
 #pragma once
 
