@@ -60,9 +60,20 @@ struct QpWorkspace::Pattern {
   int n = 0, me = 0;
   Eigen::VectorXi position;  // position[i]: where K's row and column i sit in the permuted K
   SpMat K;                   // the upper triangle of the permuted K, column-major
-  std::vector<int> hessianSlots, equalitySlots, diagonal, dualDiagonal, pairSlots, rowPairs;
+  std::vector<int> hessianSlots, equalitySlots, diagonal, dualDiagonal;
+  // C^T (Z/S) C by runs of consecutive inequality rows on the same columns (a sample's rows):
+  // a run's pairs of columns are summed densely over its rows, then added to K once. Columns
+  // that only one row touches (an elastic program's slack of a violated row) are left out of
+  // the run's columns; their pairs are added row by row.
+  struct Run {
+    int rowBegin, rowEnd, width, slotsBegin;  // rows [rowBegin, rowEnd); `width` shared columns
+  };
+  std::vector<Run> runs;
+  std::vector<int> runSlots;                   // each run's width (width + 1) / 2 pair slots
+  std::vector<char> privateColumn;             // per column of C: touched by one row only
+  std::vector<int> privateSlots, rowPrivate;   // per row: the slots of its pairs with such a column
   // The layouts (outer and inner indices) hessianSlots and equalitySlots were looked up for, and
-  // the pair slots of each inequality row's column list.
+  // the pair slots of each run's shared columns.
   std::vector<int> hessianLayout, equalityLayout;
   struct ColumnsHash {
     size_t operator()(const std::vector<int>& v) const {
@@ -111,8 +122,8 @@ struct QpWorkspace::Pattern {
 
   // Looks up the slot of every entry `qp` scatters into; false if one is not in the pattern.
   // H's and A's slots are kept while their patterns repeat (an SQP's programs of one kind share
-  // them), and an inequality row's pairs depend only on its columns, which the rows of one
-  // sample share: they are looked up once per column list. Looking up every entry took 4 ms of
+  // them), and a run's pairs depend only on its shared columns, which recur between programs:
+  // they are looked up once per column list. Looking up every entry took 4 ms of
   // each of the jump's programs (docs/design.md, Solver item 6).
   bool assignSlots(const QuadraticProgram& qp) {
     if (static_cast<int>(qp.gradient.size()) != n || static_cast<int>(qp.equalities.rows()) != me) return false;
@@ -129,22 +140,40 @@ struct QpWorkspace::Pattern {
       for (int k = 0; k < qp.equalities.outerSize(); ++k)
         for (SpRow::InnerIterator e(qp.equalities, k); e; ++e) equalitySlots.push_back(slot(n + k, static_cast<int>(e.col())));
     }
-    pairSlots.clear(), rowPairs.assign(1, 0);
     const SpRow& C = qp.inequalities;
-    std::vector<int> columns;
+    privateColumn.assign(static_cast<size_t>(n), 0);
+    {
+      std::vector<int> rowsOf(static_cast<size_t>(n), 0);
+      for (int k = 0; k < C.nonZeros(); ++k) ++rowsOf[static_cast<size_t>(C.innerIndexPtr()[k])];
+      for (int c = 0; c < n; ++c) privateColumn[static_cast<size_t>(c)] = rowsOf[static_cast<size_t>(c)] == 1;
+    }
+    runs.clear(), runSlots.clear(), privateSlots.clear(), rowPrivate.assign(1, 0);
+    std::vector<int> columns, shared;
     for (int i = 0; i < C.outerSize(); ++i) {
       columns.assign(C.innerIndexPtr() + C.outerIndexPtr()[i], C.innerIndexPtr() + C.outerIndexPtr()[i + 1]);
-      auto cached = rowSlots.find(columns);
-      if (cached == rowSlots.end()) {
-        std::vector<int> slots;
-        for (size_t a = 0; a < columns.size(); ++a)
-          for (size_t b = 0; b <= a; ++b) slots.push_back(slot(columns[a], columns[b]));
-        cached = rowSlots.emplace(columns, std::move(slots)).first;
+      shared.clear();
+      for (int c : columns)
+        if (!privateColumn[static_cast<size_t>(c)]) shared.push_back(c);
+      if (runs.empty() || !std::equal(shared.begin(), shared.end(), runColumns.begin(), runColumns.end())) {
+        auto cached = rowSlots.find(shared);
+        if (cached == rowSlots.end()) {
+          std::vector<int> slots;
+          for (size_t a = 0; a < shared.size(); ++a)
+            for (size_t b = 0; b <= a; ++b) slots.push_back(slot(shared[a], shared[b]));
+          cached = rowSlots.emplace(shared, std::move(slots)).first;
+        }
+        runs.push_back({i, i, static_cast<int>(shared.size()), static_cast<int>(runSlots.size())});
+        runSlots.insert(runSlots.end(), cached->second.begin(), cached->second.end());
+        runColumns = shared;
       }
-      pairSlots.insert(pairSlots.end(), cached->second.begin(), cached->second.end());
-      rowPairs.push_back(static_cast<int>(pairSlots.size()));
+      runs.back().rowEnd = i + 1;
+      for (size_t a = 0; a < columns.size(); ++a)
+        for (size_t b = 0; b <= a; ++b)
+          if (privateColumn[static_cast<size_t>(columns[a])] || privateColumn[static_cast<size_t>(columns[b])])
+            privateSlots.push_back(slot(columns[a], columns[b]));
+      rowPrivate.push_back(static_cast<int>(privateSlots.size()));
     }
-    for (const auto* slots : {&hessianSlots, &equalitySlots, &diagonal, &dualDiagonal, &pairSlots})
+    for (const auto* slots : {&hessianSlots, &equalitySlots, &diagonal, &dualDiagonal, &runSlots, &privateSlots})
       if (std::find(slots->begin(), slots->end(), -1) != slots->end()) {
         hessianLayout.clear(), equalityLayout.clear();  // looked up again on the next program
         return false;
@@ -184,6 +213,7 @@ struct QpWorkspace::Pattern {
 
  private:
   Eigen::VectorXi original;
+  std::vector<int> runColumns;  // the shared columns of the run being built
 
   // Every entry of K's lower triangle (unpermuted) the program scatters into: H's lower
   // triangle, A below H, the pairs of columns each inequality row touches, the diagonal.
@@ -240,15 +270,22 @@ class ReducedSystem {
       maxDiagonal_ = std::max(maxDiagonal_, base_[slot]);
     }
     for (int slot : p_.dualDiagonal) base_[slot] -= options.dualRegularisation;
-    // C_ia C_ib of every pair, in the scatter's order: the program's part of each iteration's
-    // C^T (Z/S) C, so an iteration only weights it.
+    // Each run's rows on its shared columns, densely (row-major), and each row's products of
+    // the pairs with a private column, in the order of the pattern's slots.
     const SpRow& C = qp.inequalities;
     const double* v = C.valuePtr();
-    pairProducts_.reserve(p_.pairSlots.size());
+    const int* columns = C.innerIndexPtr();
+    for (const auto& run : p_.runs)
+      for (int r = run.rowBegin; r < run.rowEnd; ++r)
+        for (int k = C.outerIndexPtr()[r]; k < C.outerIndexPtr()[r + 1]; ++k)
+          if (!p_.privateColumn[static_cast<size_t>(columns[k])]) runValues_.push_back(v[k]);
+    privateProducts_.reserve(p_.privateSlots.size());
     for (int r = 0; r < C.outerSize(); ++r) {
       const int begin = C.outerIndexPtr()[r], end = C.outerIndexPtr()[r + 1];
       for (int a = begin; a < end; ++a)
-        for (int b = begin; b <= a; ++b) pairProducts_.push_back(v[a] * v[b]);
+        for (int b = begin; b <= a; ++b)
+          if (p_.privateColumn[static_cast<size_t>(columns[a])] || p_.privateColumn[static_cast<size_t>(columns[b])])
+            privateProducts_.push_back(v[a] * v[b]);
     }
   }
   double shift() const { return shift_; }
@@ -261,17 +298,11 @@ class ReducedSystem {
   // until K has the inertia of a convex program (n positive and m_e negative pivots). False if
   // it does not have that inertia.
   bool factorise(const Vec& w, bool allowShift) {
-    const SpRow& C = qp_.inequalities;
     const int me = static_cast<int>(qp_.equalities.rows());
     Eigen::Map<Vec> values(p_.K.valuePtr(), p_.K.nonZeros());
     for (int attempt = 0; attempt < 40; ++attempt) {
       values = base_;
-      const int* slots = p_.pairSlots.data();
-      const double* products = pairProducts_.data();
-      for (int i = 0; i < C.outerSize(); ++i) {
-        const double wi = w[i];
-        for (int p = p_.rowPairs[i], end = p_.rowPairs[i + 1]; p < end; ++p) values[slots[p]] += wi * products[p];
-      }
+      addInequalities(w, values);
       if (shift_ > 0)
         for (size_t i = 0; i < p_.diagonal.size(); ++i) values[p_.diagonal[i]] += shift_ * metric_[static_cast<Eigen::Index>(i)];
       p_.ldlt.factorize(p_.K);
@@ -293,10 +324,46 @@ class ReducedSystem {
   }
 
  private:
+  // Adds C^T diag(w) C to K's values: per run, its pairs' entries of K are gathered into a
+  // dense lower triangle, w_r (C_ra C_rb) added over its rows, and the triangle put back. Each
+  // entry gets the same additions in the same order as row by row, so K is the same to the bit
+  // (the steps' paths follow the last digits, docs/design.md, Solver item 6); rows of weight
+  // zero (the guessed programs' inactive rows) add nothing and are skipped. Added to K row by
+  // row through each pair's slot, these products took as long as the factorisation: the jump's
+  // `sqp` programs have ~300 000 of them but ~80 runs with ~27 000 pairs in all. A private
+  // column's pairs have one row each, so their order does not matter.
+  void addInequalities(const Vec& w, Eigen::Map<Vec>& values) {
+    const double* row = runValues_.data();
+    for (const auto& run : p_.runs) {
+      const int width = run.width, pairs = width * (width + 1) / 2;
+      const int* slots = p_.runSlots.data() + run.slotsBegin;
+      sum_.resize(static_cast<size_t>(pairs));
+      for (int k = 0; k < pairs; ++k) sum_[static_cast<size_t>(k)] = values[slots[k]];
+      for (int r = run.rowBegin; r < run.rowEnd; ++r, row += width) {
+        const double wr = w[r];
+        if (wr == 0) continue;
+        double* out = sum_.data();
+        for (int a = 0; a < width; ++a) {
+          const double va = row[a];
+          for (int b = 0; b <= a; ++b) out[b] += wr * (va * row[b]);
+          out += a + 1;
+        }
+      }
+      for (int k = 0; k < pairs; ++k) values[slots[k]] = sum_[static_cast<size_t>(k)];
+    }
+    const int* slots = p_.privateSlots.data();
+    const double* products = privateProducts_.data();
+    for (Eigen::Index i = 0; i < w.size(); ++i) {
+      const double wi = w[i];
+      for (int p = p_.rowPrivate[static_cast<size_t>(i)], end = p_.rowPrivate[static_cast<size_t>(i) + 1]; p < end; ++p)
+        values[slots[p]] += wi * products[p];
+    }
+  }
+
   const QuadraticProgram& qp_;
   QpWorkspace::Pattern& p_;
   Vec base_, metric_;
-  std::vector<double> pairProducts_;
+  std::vector<double> runValues_, privateProducts_, sum_;
   double maxDiagonal_ = 0, shift_ = 0;
 };
 
