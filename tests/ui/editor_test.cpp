@@ -969,6 +969,76 @@ class EditorTest : public QObject {
     QCOMPARE(doc.motion(), std::shared_ptr<const SolvedMotion>(result));
   }
 
+  // A refinement adopted while a drag goes on (a live solve that refined the transcription,
+  // whose result arrives between two moves) joins the drag's command: the drag stays one undo
+  // command, its later moves keep the finer transcription, and one Undo returns to before it.
+  // After the release a refinement is its own command again.
+  void aRefinementDuringADragJoinsTheDragsCommand() {
+    MainWindow w;
+    QVERIFY(openLuxo(w, QSize(1400, 900)));
+    Document& doc = *w.document();
+    const std::string original = json(doc);
+    const int commands = doc.undoStack()->count();
+    // A converged result of `asked` on split knots (the default guess stands in for the solve).
+    auto refinedResult = [](const Scene& asked) -> std::shared_ptr<SolvedMotion> {
+      Scene split = asked;
+      for (int k = 1; k < 24; ++k) split.transcription.knots.push_back(k / 20.0);
+      split.transcription.knots.insert(split.transcription.knots.begin() + 8, 0.425);
+      split.transcription.samplesPerSegment = 8;
+      std::string why;
+      const auto problem = SpacetimeProblem::build(split, &why);
+      if (!problem) return nullptr;
+      auto result = sampleMotion(*problem);
+      result->solved = result->converged = true;
+      result->asked = std::make_shared<const Scene>(asked);
+      return result;
+    };
+    // Drag the landing contact's bar to the left on the timeline, the result arriving mid-drag.
+    TimelineBar* bar = w.timeline()->bar();
+    const QRectF r = bar->contactBar("landing");
+    QVERIFY(!r.isEmpty());
+    const QPoint from = r.center().toPoint();
+    const QPoint to = from - QPoint(static_cast<int>(bar->xAt(0.05) - bar->xAt(0.0)), 0);
+    auto moveTo = [&](int k) {
+      const QPointF p = from + QPointF(to - from) * k / 6.0;
+      QMouseEvent move(QEvent::MouseMove, p, bar->mapToGlobal(p), Qt::NoButton, Qt::LeftButton, Qt::NoModifier);
+      QApplication::sendEvent(bar, &move);
+    };
+    QTest::mousePress(bar, Qt::LeftButton, {}, from);
+    for (int k = 1; k <= 3; ++k) moveTo(k);
+    QCOMPARE(doc.undoStack()->count(), commands + 1);
+    const auto result = refinedResult(doc.scene());
+    QVERIFY(result);
+    QVERIFY(doc.acceptResult(result));
+    QCOMPARE(doc.scene().transcription.knots, result->scene->transcription.knots);
+    QVERIFY(doc.showsSolutionOfScene());
+    QCOMPARE(doc.undoStack()->count(), commands + 1);
+    QCOMPARE(doc.undoStack()->undoText(), QString("Move contact"));
+    for (int k = 4; k <= 6; ++k) moveTo(k);
+    QTest::mouseRelease(bar, Qt::LeftButton, {}, to);
+    QCOMPARE(doc.undoStack()->count(), commands + 1);
+    QCOMPARE(doc.scene().transcription.knots, result->scene->transcription.knots);
+    const auto landing = std::find_if(doc.scene().terms.begin(), doc.scene().terms.end(),
+                                      [](const TermSpec& t) { return t.id == "landing"; });
+    QVERIFY(landing != doc.scene().terms.end() && landing->start < 0.8 - 0.04);
+    const std::string dragged = json(doc);
+    doc.undoStack()->undo();
+    QCOMPARE(json(doc), original);
+    doc.undoStack()->redo();
+    QCOMPARE(json(doc), dragged);
+
+    // After the release: the same kind of result is a command of its own.
+    doc.undoStack()->undo();
+    QTest::mousePress(bar, Qt::LeftButton, {}, from);
+    for (int k = 1; k <= 6; ++k) moveTo(k);
+    QTest::mouseRelease(bar, Qt::LeftButton, {}, to);
+    QCOMPARE(doc.undoStack()->count(), commands + 1);
+    QVERIFY(doc.scene().transcription.knots.empty());
+    QVERIFY(doc.acceptResult(refinedResult(doc.scene())));
+    QCOMPARE(doc.undoStack()->count(), commands + 2);
+    QCOMPARE(doc.undoStack()->undoText(), QString("Refine the transcription"));
+  }
+
   // When the finer transcription's solve ran out of time, the motion kept is the coarser one, and
   // the validity panel says so instead of naming the finer transcription.
   void validityPanelSaysWhichTranscriptionsMotionIsShown() {

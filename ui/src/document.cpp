@@ -108,7 +108,13 @@ bool Document::acceptResult(std::shared_ptr<const SolvedMotion> motion) {
                                ? tr("Refine the transcription")
                                : tr("Refine the transcription to %1\nRefine the transcription")
                                      .arg(QString::fromStdString(describeResolution(*kept)));
-      undo_.push(new EditScene(this, text, scene_, std::move(refined), 0));
+      // During a drag whose command is the last one, the refinement merges into it: a command
+      // of its own would end the merging, and the drag's next moves would start another.
+      const int merge = continuousEdit_ != 0 && undo_.index() > 0 && undo_.index() == undo_.count() &&
+                                undo_.command(undo_.index() - 1)->id() == continuousEdit_
+                            ? continuousEdit_
+                            : 0;
+      undo_.push(new EditScene(this, text, scene_, std::move(refined), merge));
       return true;
     }
   }

@@ -138,6 +138,7 @@ void TimelineBar::mousePressEvent(QMouseEvent* e) {
     if (!r.contains(pos)) continue;
     dragTerm_ = id;
     ++dragSerial_;
+    doc_->beginContinuousEdit(dragMergeId());
     doc_->selectTerm(id);
     if (std::abs(pos.x() - r.left() - 4) < 5) drag_ = Drag::Start;
     else if (std::abs(pos.x() - r.right() + 4) < 5) drag_ = Drag::End;
@@ -154,7 +155,7 @@ void TimelineBar::mouseMoveEvent(QMouseEvent* e) {
   const double t = timeAt(e->position().x());
   const Scene& s = doc_->scene();
   const std::string id = dragTerm_;
-  const int merge = kMergeContactDrag + (dragSerial_ & 0xFFFFF);
+  const int merge = dragMergeId();
   const double minLength = 0.02 * (s.endTime - s.startTime);
   switch (drag_) {
     case Drag::Scrub: doc_->setCurrentTime(t); break;
@@ -184,7 +185,10 @@ void TimelineBar::mouseMoveEvent(QMouseEvent* e) {
   }
 }
 
-void TimelineBar::mouseReleaseEvent(QMouseEvent*) { drag_ = Drag::None; }
+void TimelineBar::mouseReleaseEvent(QMouseEvent*) {
+  if (drag_ == Drag::Move || drag_ == Drag::Start || drag_ == Drag::End) doc_->endContinuousEdit();
+  drag_ = Drag::None;
+}
 
 Timeline::Timeline(Document* doc, QWidget* parent) : QWidget(parent), doc_(doc) {
   setObjectName("timeline");

@@ -328,6 +328,7 @@ void Viewport::mousePressEvent(QMouseEvent* e) {
       drag_ = Drag::Handle;
       dragTerm_ = hd.term;
       ++dragSerial_;  // a new drag: a new undo command, merged only within this drag
+      doc_->beginContinuousEdit(dragMergeId());
       doc_->selectTerm(hd.term);
       dragPlanePoint_ = hd.position;
       dragPlaneNormal_ = glm::normalize(camera_.eye() - camera_.target);
@@ -440,7 +441,7 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
       doc_->edit(tr("Move pin"), [&](Scene& s) {
         for (TermSpec& t : s.terms)
           if (t.id == term) t.position = Eigen::Vector3d(p.x, p.y, p.z);
-      }, kMergePinDrag + (dragSerial_ & 0xFFFFF));
+      }, dragMergeId());
       break;
     }
     case Drag::Pose: dragPose(e->position()); break;
@@ -454,6 +455,7 @@ void Viewport::mouseReleaseEvent(QMouseEvent* e) {
     const QPointF moved = e->position() - pressPos_;
     if (std::hypot(moved.x(), moved.y()) < 4) clickAt(e->position());
   }
+  if (drag_ == Drag::Handle) doc_->endContinuousEdit();
   drag_ = Drag::None;
 }
 

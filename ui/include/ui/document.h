@@ -35,6 +35,10 @@ class Document : public QObject {
   // with the same non-zero mergeId become one command (a drag, typing in a field). An edit
   // that changes nothing adds no command.
   void edit(const QString& text, const std::function<void(Scene&)>& change, int mergeId = 0);
+  // A drag whose moves merge into one command (mergeId) is under way, from the press to the
+  // release (0: none). A refinement adopted meanwhile joins the drag's command (see acceptResult).
+  void beginContinuousEdit(int mergeId) { continuousEdit_ = mergeId; }
+  void endContinuousEdit() { continuousEdit_ = 0; }
 
   // Replaces the whole document (New, Open, presets from a file): clears the undo stack. A
   // stored solution that fits the scene becomes the motion on show.
@@ -65,7 +69,9 @@ class Document : public QObject {
   // converged motion stays (or comes back, after the live iterates) and the stopped one is kept
   // as stoppedMotion(). A converged motion of this scene on a transcription the solve refined
   // also sets the scene's transcription to it, as one undo command ("Refine the transcription"),
-  // and remembers the motion it reached at the scene's own transcription (undo shows it).
+  // and remembers the motion it reached at the scene's own transcription (undo shows it). While
+  // a drag goes on that command joins the drag's (one Undo returns to before the drag, as the
+  // drag's later moves keep merging) instead of splitting the drag in two.
   // Returns whether `motion` is on show.
   bool acceptResult(std::shared_ptr<const SolvedMotion> motion);
   // The last result that stopped without converging and was not put on show (null when none).
@@ -133,6 +139,7 @@ class Document : public QObject {
   static constexpr size_t kRemembered = 64;
   std::vector<std::pair<std::string, std::shared_ptr<const SolvedMotion>>> solutions_;
   std::shared_ptr<const SolvedMotion> lastGood_, stopped_;
+  int continuousEdit_ = 0;  // the merge id of the drag under way, or 0
   void remember(const std::shared_ptr<const SolvedMotion>& motion);
   double time_ = 0;
   std::optional<Posed> posed_;

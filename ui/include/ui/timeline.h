@@ -40,6 +40,8 @@ class TimelineBar : public QWidget {
   std::string dragTerm_;
   double dragOffset_ = 0;
   int dragSerial_ = 0;
+  // The undo merge id of the contact drag under way: its moves become one command.
+  int dragMergeId() const { return kMergeContactDrag + (dragSerial_ & 0xFFFFF); }
 };
 
 class Timeline : public QWidget {

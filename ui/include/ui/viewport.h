@@ -143,6 +143,8 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_3_3_Core {
   QPointF last_, pressPos_;
   std::string dragTerm_;
   int dragSerial_ = 0;
+  // The undo merge id of the pin drag under way: its moves become one command.
+  int dragMergeId() const { return kMergePinDrag + (dragSerial_ & 0xFFFFF); }
   // The plane facing the camera that a dragged pin handle or pulled body point moves in.
   glm::vec3 dragPlanePoint_{0.0f}, dragPlaneNormal_{0.0f, 0.0f, 1.0f};
 };
