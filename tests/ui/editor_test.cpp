@@ -82,6 +82,23 @@ bool openLuxo(MainWindow& w, std::optional<QSize> size = std::nullopt) {
   return openScene(w, ":/scenes/luxo_jump.json", size);
 }
 
+// A converged result of a solve asked to solve `asked` that refined its transcription to split
+// knots (24 segments, one split, s = 8); the default guess stands in for the solve, as only the
+// scenes matter to the document. Null if the split scene does not build.
+std::shared_ptr<SolvedMotion> refinedResultOf(const Scene& asked) {
+  Scene split = asked;
+  for (int k = 1; k < 24; ++k) split.transcription.knots.push_back(k / 20.0);
+  split.transcription.knots.insert(split.transcription.knots.begin() + 8, 0.425);
+  split.transcription.samplesPerSegment = 8;
+  std::string why;
+  const auto problem = SpacetimeProblem::build(split, &why);
+  if (!problem) return nullptr;
+  auto result = sampleMotion(*problem);
+  result->solved = result->converged = true;
+  result->asked = std::make_shared<const Scene>(asked);
+  return result;
+}
+
 // Where a press on the centre of `body`'s solid lands: the pixel, the hit, and the hit point in
 // the body's frame at the pose on show.
 struct BodyGrab {
@@ -928,17 +945,9 @@ class EditorTest : public QObject {
     QString error;
     QVERIFY2(doc.open(":/scenes/luxo_jump.json", &error), qPrintable(error));
     const Scene asked = doc.scene();
-    // A result on split knots (the default guess stands in for the solve: only the scenes matter).
-    Scene split = asked;
-    for (int k = 1; k < 24; ++k) split.transcription.knots.push_back(k / 20.0);
-    split.transcription.knots.insert(split.transcription.knots.begin() + 8, 0.425);
-    split.transcription.samplesPerSegment = 8;
-    std::string why;
-    const auto problem = SpacetimeProblem::build(split, &why);
-    QVERIFY2(problem, why.c_str());
-    auto result = sampleMotion(*problem);
-    result->solved = result->converged = true;
-    result->asked = std::make_shared<const Scene>(asked);
+    const auto result = refinedResultOf(asked);
+    QVERIFY(result);
+    const Scene& split = *result->scene;
 
     doc.edit("Rate", [](Scene& s) { s.transcription.controlPointsPerSecond = 25; });
     const int commands = doc.undoStack()->count();
@@ -979,20 +988,6 @@ class EditorTest : public QObject {
     Document& doc = *w.document();
     const std::string original = json(doc);
     const int commands = doc.undoStack()->count();
-    // A converged result of `asked` on split knots (the default guess stands in for the solve).
-    auto refinedResult = [](const Scene& asked) -> std::shared_ptr<SolvedMotion> {
-      Scene split = asked;
-      for (int k = 1; k < 24; ++k) split.transcription.knots.push_back(k / 20.0);
-      split.transcription.knots.insert(split.transcription.knots.begin() + 8, 0.425);
-      split.transcription.samplesPerSegment = 8;
-      std::string why;
-      const auto problem = SpacetimeProblem::build(split, &why);
-      if (!problem) return nullptr;
-      auto result = sampleMotion(*problem);
-      result->solved = result->converged = true;
-      result->asked = std::make_shared<const Scene>(asked);
-      return result;
-    };
     // Drag the landing contact's bar to the left on the timeline, the result arriving mid-drag.
     TimelineBar* bar = w.timeline()->bar();
     const QRectF r = bar->contactBar("landing");
@@ -1007,7 +1002,7 @@ class EditorTest : public QObject {
     QTest::mousePress(bar, Qt::LeftButton, {}, from);
     for (int k = 1; k <= 3; ++k) moveTo(k);
     QCOMPARE(doc.undoStack()->count(), commands + 1);
-    const auto result = refinedResult(doc.scene());
+    const auto result = refinedResultOf(doc.scene());
     QVERIFY(result);
     QVERIFY(doc.acceptResult(result));
     QCOMPARE(doc.scene().transcription.knots, result->scene->transcription.knots);
@@ -1034,7 +1029,7 @@ class EditorTest : public QObject {
     QTest::mouseRelease(bar, Qt::LeftButton, {}, to);
     QCOMPARE(doc.undoStack()->count(), commands + 1);
     QVERIFY(doc.scene().transcription.knots.empty());
-    QVERIFY(doc.acceptResult(refinedResult(doc.scene())));
+    QVERIFY(doc.acceptResult(refinedResultOf(doc.scene())));
     QCOMPARE(doc.undoStack()->count(), commands + 2);
     QCOMPARE(doc.undoStack()->undoText(), QString("Refine the transcription"));
   }
