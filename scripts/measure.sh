@@ -10,6 +10,7 @@
 #   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 20 minutes)
 #   scripts/measure.sh characters the methods on the biped, the quadruped and the humanoid only
 #   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
+#   scripts/measure.sh speedlimits the jump under joint speed limits only (about 10 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli spacetime > /dev/null
@@ -90,6 +91,39 @@ editor_solves() {
 }
 [ "${1:-}" = editor ] && { editor_solves; exit 0; }
 
+# The shipped jump with a speed limit on every joint (docs/validation.md, "Not yet holding"):
+# 30 rad/s from the default guess, then the limit stepped down, each step from the last step's
+# scene.json with only speedLimit changed (its own transcription, restored exactly).
+speed_limits() {
+  echo
+  echo "## The jump under joint speed limits (spacetime-cli solve, 2 threads, single runs)"
+  echo
+  echo "| limit (rad/s) | start | exit | objective | largest violation | transcription | seconds |"
+  echo "|---|---|---|---|---|---|---|"
+  local from="resources/scenes/luxo_jump.json" start="default guess" options=""
+  for limit in 30 27.5 25; do
+    python3 -c 'import json, sys
+s = json.load(open(sys.argv[1]))
+for b in s["characters"][0]["bodies"]:
+    if "joint" in b: b["joint"]["speedLimit"] = float(sys.argv[2])
+json.dump(s, open(sys.argv[3], "w"))' "$from" "$limit" "$tmp/speed_$limit.json"
+    set +e
+    # shellcheck disable=SC2086
+    build/app/spacetime-cli solve "$tmp/speed_$limit.json" --out "$tmp/speed_$limit" --quiet --max-seconds 300 $options 2> /dev/null
+    local status=$?
+    set -e
+    python3 - "$tmp/speed_$limit/summary.json" "$limit" "$start" "$status" "$tmp/speed_$limit/scene.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+t = json.load(open(sys.argv[5]))["transcription"]
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {s['objective']:.6f} | {s['max_violation']:.3g} | "
+      f"{t['controlPointsPerSecond']:g} / {t['samplesPerSegment']} | {s['solve_seconds']:.0f} |")
+PY
+    from="$tmp/speed_$limit/scene.json" start="$limit rad/s" options="--max-refinements 0"
+  done
+}
+[ "${1:-}" = speedlimits ] && { speed_limits; exit 0; }
+
 echo "## Solves from the default guess (solve_benchmark, medians of 5)"
 echo
 "$bench/solve_benchmark" --benchmark_filter=-Scaling --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
@@ -169,6 +203,7 @@ for b in json.load(open(sys.argv[1]))["benchmarks"]:
 PY
 [ "${1:-}" = benchmarks ] && exit 0
 editor_solves
+speed_limits
 
 echo
 echo "## Scaling (solve_benchmark's Scaling rows, 2 threads, single runs)"
