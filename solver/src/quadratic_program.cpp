@@ -148,7 +148,7 @@ struct QpWorkspace::Pattern {
       for (int c = 0; c < n; ++c) privateColumn[static_cast<size_t>(c)] = rowsOf[static_cast<size_t>(c)] == 1;
     }
     runs.clear(), runSlots.clear(), privateSlots.clear(), rowPrivate.assign(1, 0);
-    std::vector<int> columns, shared;
+    std::vector<int> columns, shared, runColumns;  // runColumns: the shared columns of the last run
     for (int i = 0; i < C.outerSize(); ++i) {
       columns.assign(C.innerIndexPtr() + C.outerIndexPtr()[i], C.innerIndexPtr() + C.outerIndexPtr()[i + 1]);
       shared.clear();
@@ -213,7 +213,6 @@ struct QpWorkspace::Pattern {
 
  private:
   Eigen::VectorXi original;
-  std::vector<int> runColumns;  // the shared columns of the run being built
 
   // Every entry of K's lower triangle (unpermuted) the program scatters into: H's lower
   // triangle, A below H, the pairs of columns each inequality row touches, the diagonal.
@@ -281,6 +280,7 @@ class ReducedSystem {
           if (!p_.privateColumn[static_cast<size_t>(columns[k])]) runValues_.push_back(v[k]);
     privateProducts_.reserve(p_.privateSlots.size());
     for (int r = 0; r < C.outerSize(); ++r) {
+      if (p_.rowPrivate[static_cast<size_t>(r)] == p_.rowPrivate[static_cast<size_t>(r) + 1]) continue;  // none
       const int begin = C.outerIndexPtr()[r], end = C.outerIndexPtr()[r + 1];
       for (int a = begin; a < end; ++a)
         for (int b = begin; b <= a; ++b)
