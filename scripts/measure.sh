@@ -7,7 +7,8 @@
 #
 #   scripts/measure.sh            everything
 #   scripts/measure.sh benchmarks the benchmarks only
-#   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 20 minutes)
+#   scripts/measure.sh methods    the methods tables only (al, sqp, witkin-kass; about 20 minutes;
+#                                 METHODS="sqp" scripts/measure.sh methods: the sqp rows only)
 #   scripts/measure.sh characters the methods on the biped, the quadruped and the humanoid only
 #   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
 #   scripts/measure.sh speedlimits the jump under joint speed limits only (about 10 minutes)
@@ -27,7 +28,7 @@ methods_tables() {
   echo "| scene | method | exit | objective | SQP or projected steps (s in programs) | LM iterations + Newton passes | seconds |"
   echo "|---|---|---|---|---|---|---|"
   for name in particle particle_gravity luxo_jump luxo_hurdle luxo_heavy luxo_3d luxo_power_formula; do
-    for method in al sqp witkin-kass; do
+    for method in $(chosen al sqp witkin-kass); do
       method_row "resources/scenes/$name.json" "$name" "$method"
     done
   done
@@ -37,7 +38,7 @@ methods_tables() {
   echo "| scene | method | exit | objective | SQP or projected steps (s in programs) | LM iterations + Newton passes | seconds |"
   echo "|---|---|---|---|---|---|---|"
   for name in luxo_hurdle_double luxo_jump_0.3m luxo_jump_0.6m luxo_jump_0.9m luxo_jump_1.2m luxo_jump_1.5m; do
-    for method in sqp witkin-kass; do
+    for method in $(chosen sqp witkin-kass); do
       method_row "tests/scenes/ladder/$name.json" "$name" "$method"
     done
   done
@@ -50,10 +51,18 @@ characters_table() {
   echo "| scene | method | exit | objective | SQP or projected steps (s in programs) | LM iterations + Newton passes | seconds |"
   echo "|---|---|---|---|---|---|---|"
   for name in biped_jump quadruped_hop humanoid_jump; do
-    for method in al sqp witkin-kass; do
+    for method in $(chosen al sqp witkin-kass); do
       method_row "resources/scenes/$name.json" "$name" "$method"
     done
   done
+}
+# The methods given, less those METHODS (when set) leaves out.
+chosen() {
+  local m
+  for m in "$@"; do
+    [[ -z "${METHODS:-}" || " $METHODS " == *" $m "* ]] && echo "$m"
+  done
+  return 0
 }
 method_row() {
   set +e

@@ -3,9 +3,10 @@
 // ICML 2008) and, for small random programs, the minimum over every choice of active
 // inequalities of the equality-constrained program's solution (a dense KKT solve each),
 // keeping the feasible ones whose multipliers push; the same minimiser from a guess of the
-// active rows, right (no interior-point iterations) or wrong. Also: a concave H gets the inertia
-// correction, redundant equality rows still solve, and a program with no feasible point ends
-// not converged with a reason rather than a wrong answer.
+// active rows, right or wrong, by active-set steps without the interior point. Also: a concave H
+// gets the inertia correction (and none where a guessed row's tangent space makes it convex),
+// redundant equality rows still solve, and a program with no feasible point ends not converged
+// with a reason rather than a wrong answer.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -199,55 +200,101 @@ TEST(QuadraticProgram, RowsSharingColumnsAndPrivateColumnsGiveTheEnumeratedMinim
   EXPECT_GT(withActiveRows, 15);
 }
 
-TEST(QuadraticProgram, TheActiveRowsGuessedRightSolveInOneFactorisationAndAWrongGuessIsRejected) {
-  // Random convex programs with active rows, each solved three ways: from scratch, with the
-  // active rows of the enumerated minimiser as the guess (taken, no iterations, the same point),
-  // and with a guess that holds an inactive row or drops an active one (not taken: the interior
-  // point's answer, still the minimiser).
+TEST(QuadraticProgram, AGuessOfTheActiveRowsRightOrWrongIsSolvedByActiveSetStepsToTheMinimiser) {
+  // Random convex programs with active rows, each solved with the active rows of the enumerated
+  // minimiser as the guess (one factorisation, no change of the working set, no interior-point
+  // iteration) and with guesses wrong in every way - an inactive row held, an active row left
+  // out, both, several at random, none held at all - which the dual and primal steps correct to
+  // the same minimiser, still without the interior point.
   std::mt19937 rng(23);
-  int taken = 0, rejected = 0;
+  std::bernoulli_distribution coin(0.3);
+  int corrected = 0, fromScratch = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const int n = 6, mi = 9;
     const auto [H, A, C, g, b, d] = randomProgram(rng, n, trial % 3, mi);
     const Vec truth = enumeratedMinimiser(H, g, A, b, C, d);
     ASSERT_EQ(truth.size(), n) << "trial " << trial;
     const QuadraticProgram qp = program(H, g, A, b, C, d);
-    QpOptions options;
-    options.activeGuess.assign(mi, 0);
+    std::vector<char> right(mi, 0);
     int activeRows = 0, inactiveRow = -1;
     for (int i = 0; i < mi; ++i)
       if (C.row(i).dot(truth) - d[i] > -1e-9) {
-        options.activeGuess[static_cast<size_t>(i)] = 1;
+        right[static_cast<size_t>(i)] = 1;
         ++activeRows;
       } else {
         inactiveRow = i;
       }
-    const QpResult right = solveQuadraticProgram(qp, options);
-    ASSERT_TRUE(right.converged) << "trial " << trial << ": " << right.reason;
-    EXPECT_TRUE(right.fromGuess) << "trial " << trial << ": " << right.reason;
-    EXPECT_EQ(right.iterations, 0);
-    EXPECT_LT((right.x - truth).lpNorm<Eigen::Infinity>(), 1e-7) << "trial " << trial;
-    EXPECT_LE((C * right.x - d).maxCoeff(), 1e-8);
-    EXPECT_GE(right.z.minCoeff(), 0.0);
-    taken += right.fromGuess;
-    if (activeRows == 0 || inactiveRow < 0) continue;
-    // Wrong both ways: an inactive row held (its multiplier would pull) and the first active
-    // row dropped (its bound would be crossed), unless the minimiser does not need it.
-    std::vector<char> wrong = options.activeGuess;
-    wrong[static_cast<size_t>(inactiveRow)] = 1;
+    QpOptions options;
+    options.activeGuess = right;
+    const QpResult r = solveQuadraticProgram(qp, options);
+    ASSERT_TRUE(r.converged) << "trial " << trial << ": " << r.reason;
+    EXPECT_TRUE(r.fromGuess) << "trial " << trial << ": " << r.reason;
+    EXPECT_EQ(r.iterations, 0);
+    EXPECT_EQ(r.activeSetChanges, 0) << "trial " << trial;
+    EXPECT_LT((r.x - truth).lpNorm<Eigen::Infinity>(), 1e-7) << "trial " << trial;
+    EXPECT_LE((C * r.x - d).maxCoeff(), 1e-8);
+    EXPECT_GE(r.z.minCoeff(), 0.0);
+    std::vector<std::vector<char>> wrong;
+    if (inactiveRow >= 0) {
+      wrong.push_back(right);
+      wrong.back()[static_cast<size_t>(inactiveRow)] = 1;  // an inactive row held: it would pull
+    }
     for (int i = 0; i < mi; ++i)
-      if (wrong[static_cast<size_t>(i)] && i != inactiveRow) {
-        wrong[static_cast<size_t>(i)] = 0;
+      if (right[static_cast<size_t>(i)]) {
+        wrong.push_back(right);
+        wrong.back()[static_cast<size_t>(i)] = 0;  // an active row left out: its bound crossed
+        if (inactiveRow >= 0) {
+          wrong.push_back(wrong.back());
+          wrong.back()[static_cast<size_t>(inactiveRow)] = 1;
+        }
         break;
       }
-    options.activeGuess = wrong;
-    const QpResult fallback = solveQuadraticProgram(qp, options);
-    ASSERT_TRUE(fallback.converged) << "trial " << trial << ": " << fallback.reason;
-    EXPECT_LT((fallback.x - truth).lpNorm<Eigen::Infinity>(), 1e-6) << "trial " << trial;
-    rejected += !fallback.fromGuess;
+    wrong.emplace_back(mi, 0);
+    std::vector<char> random(mi);
+    for (auto& held : random) held = coin(rng);
+    wrong.push_back(random);
+    for (const auto& guess : wrong) {
+      if (guess == right) continue;
+      options.activeGuess = guess;
+      const QpResult w = solveQuadraticProgram(qp, options);
+      ASSERT_TRUE(w.converged) << "trial " << trial << ": " << w.reason;
+      EXPECT_LT((w.x - truth).lpNorm<Eigen::Infinity>(), 1e-7) << "trial " << trial;
+      EXPECT_LE((C * w.x - d).maxCoeff(), 1e-8);
+      EXPECT_GE(w.z.minCoeff(), 0.0);
+      EXPECT_EQ(w.active, right) << "trial " << trial;
+      corrected += w.fromGuess && w.activeSetChanges > 0;
+      fromScratch += !w.fromGuess;
+    }
+    (void)activeRows;
   }
-  EXPECT_EQ(taken, 40);
-  EXPECT_GT(rejected, 20);
+  EXPECT_GT(corrected, 100);
+  EXPECT_EQ(fromScratch, 0);
+}
+
+TEST(QuadraticProgram, AGuessKeepsAHessianConvexOnlyOnItsRowsTangentSpaceUnshifted) {
+  // min 1/2 (y^2 - x^2) + 0.1 x subject to x <= 1, -x <= 1, x + 2y <= 3: H is concave in x, so an
+  // interior point shifts it; on the tangent space of the row x <= 1 it is convex (y alone),
+  // and that row guessed active gives the program's local minimiser x = 1, y = 0 unshifted,
+  // with the multiplier 1 - 0.1 = 0.9 from stationarity. A guess of no rows cannot be solved
+  // without a shift: H is then concave on the whole space.
+  const Mat H = Vec(Vec2(-1.0, 1.0)).asDiagonal();
+  const Vec g = Vec2(0.1, 0.0);
+  const Mat C = (Mat(3, 2) << 1, 0, -1, 0, 1, 2).finished();
+  const Vec d = Eigen::Vector3d(1, 1, 3);
+  const QuadraticProgram qp = program(H, g, Mat::Zero(0, 2), Vec::Zero(0), C, d);
+  QpOptions options;
+  options.activeGuess = {1, 0, 0};
+  const QpResult r = solveQuadraticProgram(qp, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_TRUE(r.fromGuess) << r.reason;
+  EXPECT_EQ(r.shift, 0.0);
+  EXPECT_NEAR(r.x[0], 1.0, 1e-9);
+  EXPECT_NEAR(r.x[1], 0.0, 1e-9);
+  EXPECT_NEAR(r.z[0], 0.9, 1e-8);
+  options.activeGuess = {0, 0, 0};
+  const QpResult none = solveQuadraticProgram(qp, options);
+  ASSERT_TRUE(none.converged) << none.reason;
+  EXPECT_GT(none.shift, 0.0);
 }
 
 TEST(QuadraticProgram, AWorkspaceSharedByProgramsWithChangingRowsGivesEachItsOwnSolution) {

@@ -21,14 +21,14 @@
 // as the inertia correction of Waechter & Biegler (2006, section 3.1) does for a Newton step.
 //
 // A guess of the active rows (the previous program's, in an SQP near its solution) is tried
-// first: the program with those rows held as equalities is one factorisation of the same
-// system (the held rows weighted heavily, as an interior point weighs them at its end, the
-// others not at all), and its point is returned when it is a KKT point of the whole program to
-// the tolerance - the other rows' bounds hold and the held rows push. A guess a few rows off
-// is corrected as a primal-dual active set method corrects it (up to three factorisations);
-// otherwise the interior point solves from scratch. A convex program has one minimiser, which
-// both paths return; where H needs the inertia shift, the guess's shift is the one that makes H
-// convex on the held rows' tangent space, which can be smaller than the interior point's.
+// first, by active-set steps on one factorisation of the same system with the guessed rows
+// weighted heavily (solver/src/active_set_steps.h): Goldfarb and Idnani's dual steps add the
+// rows the point violates, primal steps drop the rows that pull, one row and one solve per
+// change. A convex program has one minimiser, which both paths return; where H needs the
+// inertia shift, the steps' shift is the one that makes H convex on the tangent spaces of the
+// working rows they pass through, which can be smaller than the interior point's. Where the
+// steps cannot finish (a large guess, many changes, no feasible point) the interior point
+// solves from scratch.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -74,7 +74,8 @@ struct QpResult {
   double shift = 0;  // multiple of the shift metric added to H (0 when H was convex enough)
   double primalResidual = 0, dualResidual = 0, complementarity = 0;  // at x, unscaled, inf-norms
   std::vector<char> active;  // per inequality row: at its bound (its multiplier above its slack)
-  bool fromGuess = false;    // the active guess (or its correction) was the solution: no iterations
+  bool fromGuess = false;    // solved by active-set steps from the guess: no interior-point iterations
+  int activeSetChanges = 0;  // rows those steps added or dropped
   std::string reason;
 };
 
