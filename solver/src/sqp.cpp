@@ -148,8 +148,8 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   auto polish = [&] { return raw::polishInto(problem, options, threads, deadline, cancel, &summary); };
 
   // The rows active in the last program solved (per row of the problem): the next exact-Hessian
-  // program's guess (QpOptions::activeGuess). From the third step on the active set changes by
-  // a few rows between programs, and the active-set steps from the guess solve a program on one
+  // program's guess (QpOptions::activeGuess). Near the constraints the active set changes by a
+  // few rows between programs, and the active-set steps from the guess solve a program on one
   // factorisation and a solve per change instead of ~15 interior-point iterations; its inactive
   // rows' multipliers are then exactly zero (an interior point leaves each ~mu/s), so fewer rows
   // stay held by their multiplier. The far programs (Gauss-Newton) get no guess: between them
