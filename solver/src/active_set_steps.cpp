@@ -58,7 +58,10 @@ class GuessedActiveSet {
                    double dualScale, double primalScale)
       : qp_(qp), H_(H), options_(options), system_(system), dualScale_(dualScale), primalScale_(primalScale),
         n_(static_cast<int>(qp.gradient.size())), me_(static_cast<int>(qp.equalities.rows())),
-        mi_(static_cast<int>(qp.inequalities.rows())), rho_(kGuessWeight * (1 + system.largestDiagonal())) {}
+        mi_(static_cast<int>(qp.inequalities.rows())), rho_(kGuessWeight * (1 + system.largestDiagonal())),
+        rowNorm_(mi_) {
+    for (int i = 0; i < mi_; ++i) rowNorm_[i] = std::max(1e-300, qp.inequalities.row(i).norm());
+  }
 
   // Attempts from the guess with the shift the guess's factorisation needs, then, where a
   // working set on the way lost convexity, with ten times the shift (as the interior point
@@ -115,16 +118,14 @@ class GuessedActiveSet {
       }
       minimiserOnW(&u_, &lambda_);
     }
-    Vec rowNorm(mi_);
-    for (int i = 0; i < mi_; ++i) rowNorm[i] = std::max(1e-300, C.row(i).norm());
     for (;;) {
       const Vec excess = C * u_.head(n_) - qp_.inequalityBounds;
       const std::vector<char> held = inW();
       int p = -1;
       double worst = 0;
       for (int i = 0; i < mi_; ++i)
-        if (!held[static_cast<size_t>(i)] && excess[i] > primalTolerance && excess[i] / rowNorm[i] > worst) {
-          worst = excess[i] / rowNorm[i];
+        if (!held[static_cast<size_t>(i)] && excess[i] > primalTolerance && excess[i] / rowNorm_[i] > worst) {
+          worst = excess[i] / rowNorm_[i];
           p = i;
         }
       if (p >= 0) {
@@ -390,6 +391,7 @@ class GuessedActiveSet {
   const double dualScale_, primalScale_;
   const int n_, me_, mi_;
   const double rho_;
+  Vec rowNorm_;  // |C_i|: the most violated row is the one farthest from its bound
   std::vector<int> W_, B_, D_;  // working rows, the factorisation's weighted rows, B's rows not in W
   Vec u0_, u_, lambda_;
   std::unordered_map<int, Vec> columns_;

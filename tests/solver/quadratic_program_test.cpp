@@ -216,11 +216,10 @@ TEST(QuadraticProgram, AGuessOfTheActiveRowsRightOrWrongIsSolvedByActiveSetSteps
     ASSERT_EQ(truth.size(), n) << "trial " << trial;
     const QuadraticProgram qp = program(H, g, A, b, C, d);
     std::vector<char> right(mi, 0);
-    int activeRows = 0, inactiveRow = -1;
+    int inactiveRow = -1;
     for (int i = 0; i < mi; ++i)
       if (C.row(i).dot(truth) - d[i] > -1e-9) {
         right[static_cast<size_t>(i)] = 1;
-        ++activeRows;
       } else {
         inactiveRow = i;
       }
@@ -265,7 +264,6 @@ TEST(QuadraticProgram, AGuessOfTheActiveRowsRightOrWrongIsSolvedByActiveSetSteps
       corrected += w.fromGuess && w.activeSetChanges > 0;
       fromScratch += !w.fromGuess;
     }
-    (void)activeRows;
   }
   EXPECT_GT(corrected, 100);
   EXPECT_EQ(fromScratch, 0);
