@@ -6,7 +6,8 @@
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
 // solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
-// solution, else from the scene's own (an editor save), else from the default guess. Progress (iteration,
+// solution (an earlier run's DIR or DIR/motion.json stand for its DIR/scene.json), else from the
+// scene's own (an editor save), else from the default guess. Progress (iteration,
 // objective, violation) goes to stderr unless --quiet. Exit status: 0 converged and every
 // validity check passes; 1 the outputs could not be written; 2 bad input (a one-line reason,
 // before anything is written); 3 the solve did not converge; 4 it converged but the validity
@@ -19,6 +20,7 @@
 #include <new>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -63,7 +65,8 @@ constexpr const char* kHelp =
     "                     or the solve stalls (default: the scene's solver.maxRefinements, else\n"
     "                     3; 0: only the scene's transcription)\n"
     "  --init SOLVED.json start from the solution stored in a scene: DIR/scene.json of an earlier\n"
-    "                     solve (resumes it exactly when the scene is the same) or an editor save.\n"
+    "                     solve (resumes it exactly when the scene is the same) or an editor save;\n"
+    "                     DIR or DIR/motion.json of a solve stand for its DIR/scene.json.\n"
     "                     Without it a scene's own stored solution is the start.\n"
     "Exit status: 0 converged and valid; 1 outputs not written; 2 bad input or options (nothing\n"
     "written); 3 not converged or out of time (outputs written); 4 converged but the validity\n"
@@ -108,6 +111,7 @@ int run(int argc, char** argv) {
   bool polish = true;  // --no-polish: the augmented Lagrangian alone (to compare)
   int maxRefinements = -1;  // --max-refinements: overrides the scene's solver.maxRefinements
   std::string initPath;  // --init: a scene holding a stored solution
+  std::string initGiven;  // --init as given: that scene, or a solve's output standing for it
   std::string method;    // --method: overrides the scene's solver.method
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
@@ -165,9 +169,21 @@ int run(int argc, char** argv) {
   // The starting point: --init's stored solution, else the scene's own, else the default guess.
   std::optional<Scene> start;
   if (!initPath.empty()) {
+    // A solve's output directory or its motion.json resumes from the scene.json written with it.
+    initGiven = initPath;
+    initPath = resumedScenePath(initGiven, &error);
+    if (initPath.empty()) {
+      std::fprintf(stderr, "spacetime-cli: --init: %s\n", error.c_str());
+      return 2;
+    }
     const SceneLoadResult init = loadSceneFile(initPath);
     if (!init.scene) {
-      std::fprintf(stderr, "spacetime-cli: --init: %s\n", init.error.c_str());
+      // A motion.json moved away from the solve that wrote it holds no solver state.
+      const bool motion = std::filesystem::path(initPath).filename() == "motion.json";
+      std::fprintf(stderr, "spacetime-cli: --init: %s%s\n", init.error.c_str(),
+                   motion ? " (a solve's motion.json holds no solver state: give --init the scene.json or the "
+                            "output directory of the solve that wrote it)"
+                          : "");
       return 2;
     }
     if (!init.scene->solution) {
@@ -206,7 +222,8 @@ int run(int argc, char** argv) {
     const SpacetimeProblem::WarmStart how = problem->warmStartFrom(*start, {s.variables, s.multipliers, s.rho});
     options.warmStart = how != SpacetimeProblem::WarmStart::None;
     if (!quiet)
-      std::fprintf(stderr, "starting from %s: %s\n", initPath.empty() ? "the scene's stored solution" : initPath.c_str(),
+      std::fprintf(stderr, "starting from %s%s: %s\n", initPath.empty() ? "the scene's stored solution" : initPath.c_str(),
+                   initGiven == initPath ? "" : (" (for --init " + initGiven + ")").c_str(),
                    how == SpacetimeProblem::WarmStart::Exact      ? "its solver state, exactly"
                    : how == SpacetimeProblem::WarmStart::Refitted ? "its motion, re-fitted to this transcription"
                                                                   : "nothing in common with this scene; the default guess");

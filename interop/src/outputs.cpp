@@ -309,6 +309,28 @@ bool checkOutputDirectory(const std::string& dir, std::string* error) {
   return true;
 }
 
+std::string resumedScenePath(const std::string& path, std::string* error) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path given(path);
+  const bool directory = fs::is_directory(given, ec);
+  const fs::path dir = directory ? given : given.parent_path().empty() ? fs::path(".") : given.parent_path();
+  const bool solveOutput = fs::exists(dir / "summary.json", ec);
+  if (!directory && (!solveOutput || given.filename() == "scene.json" || !isSolveOutput(given.filename().string())))
+    return path;
+  if (!solveOutput) {
+    *error = path + " is a directory, not a solve's output (no summary.json in it): give a solved scene.json";
+    return {};
+  }
+  const fs::path scene = dir / "scene.json";
+  if (!fs::is_regular_file(scene, ec)) {
+    *error = path + " is " + (directory ? "a solve's output directory" : "a solve's output") +
+             ", but the scene.json holding that solve's state is missing from " + dir.string();
+    return {};
+  }
+  return scene.string();
+}
+
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, const OutputOptions& options, const std::string& dir,
                        std::string* error, std::string* warning,

@@ -231,6 +231,31 @@ assert abs(resumed["objective"] - cold["objective"]) < 1e-6 * cold["objective"],
 assert abs(again["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (again["objective"], cold["objective"])
 assert again["iterations"] == 0, again["iterations"]
 PY
+# What the issue's users type: the earlier solve's motion.json (or its output directory) stands
+# for the scene.json that solve wrote beside it, and the solve says so; a motion.json moved away
+# from its solve, or a directory no solve wrote, is bad input with a reason.
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/from_motion" --init "$tmp/limited/motion.json" 2>"$tmp/from_motion.err" ||
+  fail "the jump resumed from motion.json exited $?: $(tail -3 "$tmp/from_motion.err")"
+grep -q "starting from $tmp/limited/scene.json (for --init $tmp/limited/motion.json): its solver state, exactly" \
+  "$tmp/from_motion.err" || fail "the resume from motion.json does not say where it starts: $(head -1 "$tmp/from_motion.err")"
+python3 - "$tmp/cold/summary.json" "$tmp/from_motion/summary.json" <<'PY' || fail "the solve resumed from motion.json is wrong"
+import json, sys
+cold, resumed = (json.load(open(p)) for p in sys.argv[1:])
+assert abs(resumed["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (resumed["objective"], cold["objective"])
+PY
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/from_dir" --init "$tmp/limited" --max-seconds 1 2>"$tmp/from_dir.err"
+grep -q "starting from $tmp/limited/scene.json (for --init $tmp/limited): its solver state, exactly" "$tmp/from_dir.err" ||
+  fail "the resume from an output directory does not say where it starts: $(head -1 "$tmp/from_dir.err")"
+mkdir -p "$tmp/moved_away" && cp "$tmp/limited/motion.json" "$tmp/moved_away/"
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/no_state" --init "$tmp/moved_away/motion.json" 2>"$tmp/no_state.err"
+status=$?
+[ "$status" -eq 2 ] || fail "--init of a lone motion.json exited $status, expected 2"
+grep -q "motion.json holds no solver state" "$tmp/no_state.err" || fail "unclear --init error: $(cat "$tmp/no_state.err")"
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/no_state" --init "$tmp/moved_away" 2>"$tmp/no_state.err"
+status=$?
+[ "$status" -eq 2 ] || fail "--init of a directory no solve wrote exited $status, expected 2"
+grep -q "not a solve's output" "$tmp/no_state.err" || fail "unclear --init error: $(cat "$tmp/no_state.err")"
+[ ! -e "$tmp/no_state" ] || fail "a bad --init created the output directory"
 "$cli" solve "$scenes/particle.json" --out "$tmp/no_init" --init "$scenes/particle.json" 2>"$tmp/no_init.err"
 status=$?
 [ "$status" -eq 2 ] || fail "--init without a stored solution exited $status, expected 2"

@@ -28,6 +28,15 @@ std::string motionCsv(const Animation& animation);
 // one-line reason otherwise. Creates nothing.
 bool checkOutputDirectory(const std::string& dir, std::string* error);
 
+// The scene a solve resumes from for `path` (spacetime-cli --init): a solve's output directory
+// or any file a solve wrote into one other than scene.json (motion.json, summary.json, ...) stands
+// for that directory's scene.json - those files hold the sampled motion, not the splines'
+// coefficients and the multipliers a warm start takes, which the same solve wrote there. A
+// directory counts as a solve's output when it holds its summary.json. Any other path is
+// returned as it is (a solved scene, an editor save). Empty, with a one-line reason, for a
+// directory that is no solve's output or whose scene.json is missing.
+std::string resumedScenePath(const std::string& path, std::string* error);
+
 // Frames per second of each motion file. motion.json is for analysis (dense); a BVH at 1000 Hz
 // became a 50 s action in Blender's importer with its default settings (one scene frame per BVH
 // frame at 24 fps), so BVH gets an animation frame rate (spacetime-cli: the scene's frameRate). glTF's keys are
