@@ -6,8 +6,9 @@
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
 // solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
-// solution (an earlier run's DIR or DIR/motion.json stand for its DIR/scene.json), else from the
-// scene's own (an editor save), else from the default guess. Progress (iteration,
+// solution (an earlier run's DIR or DIR/motion.json stand for its DIR/scene.json; a motion.json
+// alone starts from its sampled motion, re-fitted), else from the scene's own (an editor save),
+// else from the default guess. Progress (iteration,
 // objective, violation) goes to stderr unless --quiet. Exit status: 0 converged and every
 // validity check passes; 1 the outputs could not be written; 2 bad input (a one-line reason,
 // before anything is written); 3 the solve did not converge; 4 it converged but the validity
@@ -24,7 +25,10 @@
 #include <optional>
 #include <string>
 
+#include "core/atomic_file.h"
 #include "core/scene_io.h"
+#include "interop/motion_import.h"
+#include "solver/motion_source.h"
 #include "solver/augmented_lagrangian.h"
 #include "interop/outputs.h"
 #include "solver/interior_point.h"
@@ -66,7 +70,8 @@ constexpr const char* kHelp =
     "                     3; 0: only the scene's transcription)\n"
     "  --init SOLVED.json start from the solution stored in a scene: DIR/scene.json of an earlier\n"
     "                     solve (resumes it exactly when the scene is the same) or an editor save;\n"
-    "                     DIR or DIR/motion.json of a solve stand for its DIR/scene.json.\n"
+    "                     DIR or DIR/motion.json of a solve stand for its DIR/scene.json; a\n"
+    "                     motion.json alone starts from its motion, fitted to this scene.\n"
     "                     Without it a scene's own stored solution is the start.\n"
     "Exit status: 0 converged and valid; 1 outputs not written; 2 bad input or options (nothing\n"
     "written); 3 not converged or out of time (outputs written); 4 converged but the validity\n"
@@ -168,6 +173,7 @@ int run(int argc, char** argv) {
   }
   // The starting point: --init's stored solution, else the scene's own, else the default guess.
   std::optional<Scene> start;
+  std::optional<Animation> startMotion;
   if (!initPath.empty()) {
     // A solve's output directory or its motion.json resumes from the scene.json written with it.
     initGiven = initPath;
@@ -176,22 +182,29 @@ int run(int argc, char** argv) {
       std::fprintf(stderr, "spacetime-cli: --init: %s\n", error.c_str());
       return 2;
     }
-    const SceneLoadResult init = loadSceneFile(initPath);
-    if (!init.scene) {
-      // A motion.json moved away from the solve that wrote it holds no solver state.
-      const bool motion = std::filesystem::path(initPath).filename() == "motion.json";
-      std::fprintf(stderr, "spacetime-cli: --init: %s%s\n", init.error.c_str(),
-                   motion ? " (a solve's motion.json holds no solver state: give --init the scene.json or the "
-                            "output directory of the solve that wrote it)"
-                          : "");
-      return 2;
+    std::string text;
+    if (readWholeFile(initPath, &text, &error) && looksLikeMotionJson(text)) {
+      // A motion file without its run's scene.json (copied out, or written by another tool in
+      // the same contract): its sampled motion and contact forces, re-fitted below.
+      MotionLoadResult motion = parseMotionJson(text, initPath);
+      if (!motion.animation) {
+        std::fprintf(stderr, "spacetime-cli: --init: %s\n", motion.error.c_str());
+        return 2;
+      }
+      startMotion = std::move(motion.animation);
+    } else {
+      const SceneLoadResult init = loadSceneFile(initPath);
+      if (!init.scene) {
+        std::fprintf(stderr, "spacetime-cli: --init: %s\n", init.error.c_str());
+        return 2;
+      }
+      if (!init.scene->solution) {
+        std::fprintf(stderr, "spacetime-cli: --init: %s holds no solution (expected DIR/scene.json of a solve, a "
+                     "motion.json, or a scene the editor saved after solving)\n", initPath.c_str());
+        return 2;
+      }
+      start = *init.scene;
     }
-    if (!init.scene->solution) {
-      std::fprintf(stderr, "spacetime-cli: --init: %s holds no solution (expected DIR/scene.json of a solve, or a scene "
-                   "the editor saved after solving)\n", initPath.c_str());
-      return 2;
-    }
-    start = *init.scene;
   } else if (loaded.scene->solution) {
     start = *loaded.scene;
   }
@@ -227,6 +240,23 @@ int run(int argc, char** argv) {
                    how == SpacetimeProblem::WarmStart::Exact      ? "its solver state, exactly"
                    : how == SpacetimeProblem::WarmStart::Refitted ? "its motion, re-fitted to this transcription"
                                                                   : "nothing in common with this scene; the default guess");
+  }
+  if (startMotion) {
+    const int matched = problem->initializeFrom(*motionSourceOf(*startMotion));
+    options.warmStart = matched > 0;
+    // A motion file has no multipliers. The augmented Lagrangian's warm start needs them (its
+    // Newton polish takes its active set from them): from the jump's own motion it re-ran its
+    // whole path, 315-375 LM iterations to another optimum, where sqp's first program computes
+    // them and its steps end at the motion's optimum in 1-3 (docs/design.md, Solver item 9). So
+    // the scene's `al` becomes `sqp` here; an explicit --method is kept.
+    const bool toSqp = matched > 0 && method.empty() && options.method == SolverMethod::AugmentedLagrangian;
+    if (toSqp) options.method = SolverMethod::Sqp;
+    if (!quiet)
+      std::fprintf(stderr, "starting from %s: %s%s\n", initPath.c_str(),
+                   matched > 0 ? "its sampled motion and contact forces, fitted to this transcription (a motion file "
+                                 "holds no solver state: the multipliers start at zero)"
+                               : "no character of this scene in it (matched by id and dof count); the default guess",
+                   toSqp ? "; solved by sqp, whose programs compute the multipliers (--method al to keep al)" : "");
   }
   ProgressCallback progress = nullptr;
   if (!quiet)

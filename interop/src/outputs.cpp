@@ -236,6 +236,9 @@ std::string motionJson(const Animation& animation) {
       jt["term"] = t.term;
       jt["link"] = t.link;
       jt["pointIndex"] = t.pointIndex;
+      jt["start"] = t.start;  // the interval as solved (with a free end, where it let go)
+      jt["end"] = t.end;
+      jt["freeEnd"] = t.freeEnd;
       json p = json::array(), f = json::array();
       for (const auto& x : t.position) p.push_back(vec3(x));
       for (const auto& x : t.force) f.push_back(vec3(x));

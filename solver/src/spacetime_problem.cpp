@@ -8,6 +8,7 @@
 #include "dynamics/algorithms.h"
 #include "dynamics/build_model.h"
 #include "dynamics/formula_environment.h"
+#include "solver/motion_source.h"
 
 namespace spacetime {
 namespace {
@@ -1230,26 +1231,36 @@ std::vector<Eigen::Vector3d> SpacetimeProblem::contactForces(int j, double t) co
 }
 
 int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
+  const int matched = initializeFrom(*motionSourceOf(previous));
+  // The penalty transfers with the motion: it keeps the next solve near the transferred motion
+  // instead of first relaxing the constraints.
+  if (matched > 0) al_.rho = std::max(al_.rho, previous.al_.rho);
+  return matched;
+}
+
+int SpacetimeProblem::initializeFrom(const MotionSource& previous) {
+  // Each character's counterpart (-1: none, or another body tree); a contact transfers only with
+  // its character.
+  std::vector<int> counterpart;
+  for (size_t c = 0; c < characters_.size(); ++c)
+    counterpart.push_back(previous.character(scene_.characters[c].id, characters_[c].dofs));
   int matched = 0;
   // Free lift-off instants first: the root's breakpoints and the contacts' samples follow them.
   for (const FreeEnd& e : freeEnds_) {
-    const std::string& id = scene_.terms[contacts_[e.contact].term].id;
-    for (const ContactVariables& old : previous.contacts())
-      if (previous.scene().terms[old.term].id == id) x_[e.offset] = std::clamp(old.end, e.lower, e.upper);
+    const ContactVariables& ct = contacts_[e.contact];
+    if (counterpart[static_cast<size_t>(ct.character)] < 0) continue;
+    if (const auto old = previous.contactInterval(scene_.terms[ct.term].id))
+      x_[e.offset] = std::clamp(old->second, e.lower, e.upper);
   }
   syncFreeEnds();
   const CubicBSpline& spline = transcription_.motion;
-  const double t0 = std::max(spline.start(), previous.scene().startTime);
-  const double t1 = std::min(spline.end(), previous.scene().endTime);
+  const double t0 = std::max(spline.start(), previous.start());
+  const double t1 = std::min(spline.end(), previous.end());
   auto clampTime = [&](double t) { return std::clamp(t, t0, t1); };
   for (size_t c = 0; c < characters_.size(); ++c) {
-    const std::string& id = scene_.characters[c].id;
-    const auto it = std::find_if(previous.scene().characters.begin(), previous.scene().characters.end(),
-                                 [&](const CharacterSpec& s) { return s.id == id; });
-    if (it == previous.scene().characters.end()) continue;
-    const int pc = static_cast<int>(it - previous.scene().characters.begin());
     const CharacterVariables& cv = characters_[c];
-    if (previous.characters()[pc].dofs != cv.dofs) continue;  // a different body tree
+    const int pc = counterpart[c];
+    if (pc < 0) continue;
     ++matched;
     for (const DofGroup& g : cv.groups) {
       const int n = static_cast<int>(g.dofs.size());
@@ -1271,8 +1282,8 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
         // The first of a repeated breakpoint is the state before an impact.
         const bool before = g.beforeImpact(k);
         const double t = clampTime(g.breaks[k]);
-        const Eigen::VectorXd q = before ? previous.jointStateBefore(pc, t, 0) : previous.jointState(pc, t, 0);
-        const Eigen::VectorXd v = before ? previous.jointStateBefore(pc, t, 1) : previous.jointState(pc, t, 1);
+        const Eigen::VectorXd q = previous.jointState(pc, t, 0, before);
+        const Eigen::VectorXd v = previous.jointState(pc, t, 1, before);
         for (int d = 0; d < n; ++d) {
           x_[g.offset + k * 2 * n + d] = q[g.dofs[d]];
           x_[g.offset + k * 2 * n + n + d] = v[g.dofs[d]];
@@ -1282,26 +1293,28 @@ int SpacetimeProblem::initializeFrom(const SpacetimeProblem& previous) {
     }
   }
   for (ContactVariables& ct : contacts_) {
+    if (counterpart[static_cast<size_t>(ct.character)] < 0) continue;
     const std::string& id = scene_.terms[ct.term].id;
-    for (size_t j = 0; j < previous.contacts().size(); ++j) {
-      const ContactVariables& old = previous.contacts()[j];
-      if (previous.scene().terms[old.term].id != id || old.pointForceSize() != ct.pointForceSize()) continue;
-      for (size_t i = 0; i < ct.times.size(); ++i) {
-        // Forces at the old interval's matching instant (the interval may have moved).
-        const double u = (ct.times[i] - ct.start) / (ct.end - ct.start);
-        setSampleForces(static_cast<int>(&ct - contacts_.data()), static_cast<int>(i),
-                        previous.contactForces(static_cast<int>(j), old.start + u * (old.end - old.start)));
-      }
-      for (size_t a = 0; a < 2 * ct.points.points.size(); ++a) x_[ct.anchorOffset + a] = previous.variables()[old.anchorOffset + a];
-      if (ct.impact() && old.impact())
-        for (int k = 0; k < ct.pointForceSize(); ++k) x_[ct.impulseOffset + k] = previous.variables()[old.impulseOffset + k];
+    const int points = static_cast<int>(ct.points.points.size());
+    const auto old = previous.contactInterval(id);
+    if (!old || previous.contactForces(id, points, ct.forceDims, old->first).empty()) continue;
+    for (size_t i = 0; i < ct.times.size(); ++i) {
+      // Forces at the old interval's matching instant (the interval may have moved).
+      const double u = (ct.times[i] - ct.start) / (ct.end - ct.start);
+      setSampleForces(static_cast<int>(&ct - contacts_.data()), static_cast<int>(i),
+                      previous.contactForces(id, points, ct.forceDims, old->first + u * (old->second - old->first)));
+    }
+    const std::vector<double> anchors = previous.anchors(id, points, ct.forceDims);
+    for (size_t a = 0; a < anchors.size(); ++a) x_[ct.anchorOffset + static_cast<int>(a)] = anchors[a];
+    if (ct.impact()) {
+      const std::vector<Eigen::Vector3d> impulses = previous.impulses(id, points, ct.forceDims);
+      for (size_t p = 0; p < impulses.size(); ++p)
+        for (int k = 0; k < ct.forceDims; ++k) x_[ct.impulseOffset + static_cast<int>(p) * ct.forceDims + k] = impulses[p][k];
     }
   }
-  // Multipliers do not transfer (their rows differ), but the penalty does: it keeps the next
-  // solve near the transferred motion instead of first relaxing the constraints.
+  // Multipliers do not transfer (their rows differ).
   settleHeldStances(&x_);
   std::fill(al_.lambda.begin(), al_.lambda.end(), 0.0);
-  if (matched > 0) al_.rho = std::max(al_.rho, previous.al_.rho);
   return matched;
 }
 

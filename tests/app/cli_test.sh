@@ -232,8 +232,8 @@ assert abs(again["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (
 assert again["iterations"] == 0, again["iterations"]
 PY
 # What the issue's users type: the earlier solve's motion.json (or its output directory) stands
-# for the scene.json that solve wrote beside it, and the solve says so; a motion.json moved away
-# from its solve, or a directory no solve wrote, is bad input with a reason.
+# for the scene.json that solve wrote beside it, and the solve says so; a directory no solve
+# wrote is bad input with a reason.
 "$cli" solve "$scenes/luxo_jump.json" --out "$tmp/from_motion" --init "$tmp/limited/motion.json" 2>"$tmp/from_motion.err" ||
   fail "the jump resumed from motion.json exited $?: $(tail -3 "$tmp/from_motion.err")"
 grep -q "starting from $tmp/limited/scene.json (for --init $tmp/limited/motion.json): its solver state, exactly" \
@@ -246,11 +246,35 @@ PY
 "$cli" solve "$scenes/luxo_jump.json" --out "$tmp/from_dir" --init "$tmp/limited" --max-seconds 1 2>"$tmp/from_dir.err"
 grep -q "starting from $tmp/limited/scene.json (for --init $tmp/limited): its solver state, exactly" "$tmp/from_dir.err" ||
   fail "the resume from an output directory does not say where it starts: $(head -1 "$tmp/from_dir.err")"
-mkdir -p "$tmp/moved_away" && cp "$tmp/limited/motion.json" "$tmp/moved_away/"
-"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/no_state" --init "$tmp/moved_away/motion.json" 2>"$tmp/no_state.err"
+# A motion.json moved away from its solve starts from its sampled motion and contact forces,
+# fitted to the scene's transcription: the scene's al becomes sqp (a motion file has no
+# multipliers, sqp's programs compute them), which ends at the converged motion's optimum in a
+# few steps.
+mkdir -p "$tmp/moved_away" && cp "$tmp/cold/motion.json" "$tmp/moved_away/"
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/lone" --init "$tmp/moved_away/motion.json" 2>"$tmp/lone.err" ||
+  fail "the jump started from a lone motion.json exited $?: $(tail -3 "$tmp/lone.err")"
+grep -q "starting from $tmp/moved_away/motion.json: its sampled motion and contact forces, fitted to this transcription" \
+  "$tmp/lone.err" || fail "the start from a lone motion.json does not say what it is: $(head -1 "$tmp/lone.err")"
+python3 - "$tmp/cold/summary.json" "$tmp/lone/summary.json" <<'PY' || fail "the solve from a lone motion.json is wrong"
+import json, sys
+cold, lone = (json.load(open(p)) for p in sys.argv[1:])
+assert lone["method"] == "sqp" and 1 <= lone["sqp_steps"] <= 3 and lone["iterations"] == 0, (lone["method"], lone["sqp_steps"], lone["iterations"])
+assert abs(lone["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (lone["objective"], cold["objective"])
+assert lone["validity"]["valid"], lone["validity"]
+PY
+# A malformed motion file is bad input naming the field.
+python3 - "$tmp/cold/motion.json" "$tmp/moved_away/bad_motion.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+m["characters"][0]["q"][12] = m["characters"][0]["q"][12][:-1]
+json.dump(m, open(sys.argv[2], "w"))
+PY
+"$cli" solve "$scenes/luxo_jump.json" --out "$tmp/no_state" --init "$tmp/moved_away/bad_motion.json" 2>"$tmp/no_state.err"
 status=$?
-[ "$status" -eq 2 ] || fail "--init of a lone motion.json exited $status, expected 2"
-grep -q "motion.json holds no solver state" "$tmp/no_state.err" || fail "unclear --init error: $(cat "$tmp/no_state.err")"
+[ "$status" -eq 2 ] || fail "--init of a malformed motion.json exited $status, expected 2"
+grep -q "bad_motion.json: field 'characters\[0\].q\[12\]': expected 6 numbers, one per dof" "$tmp/no_state.err" ||
+  fail "unclear --init error: $(cat "$tmp/no_state.err")"
+rm "$tmp/moved_away/bad_motion.json"
 "$cli" solve "$scenes/luxo_jump.json" --out "$tmp/no_state" --init "$tmp/moved_away" 2>"$tmp/no_state.err"
 status=$?
 [ "$status" -eq 2 ] || fail "--init of a directory no solve wrote exited $status, expected 2"

@@ -45,6 +45,8 @@
 
 namespace spacetime {
 
+class MotionSource;
+
 // Which root (Hermite) interval an instant on a breakpoint reads; the root's acceleration jumps
 // there. Contacts: the interval whose contacts are those active at t (the instant a contact ends
 // belongs to the contact phase, one that begins to it too). Before: the interval that ends at t
@@ -301,6 +303,9 @@ class SpacetimeProblem {
   // no counterpart keeps this problem's default guess; multipliers start at zero and the
   // penalty at the previous one's. Returns the number of characters matched.
   int initializeFrom(const SpacetimeProblem& previous);
+  // The same from any earlier motion (motion_source.h: a sampled Animation read back from a
+  // motion file); the penalty stays this problem's own.
+  int initializeFrom(const MotionSource& previous);
 
   // Starts from `state`, a solution of the problem of `source`: exactly (restore) when this
   // problem has that layout - a resumed solve, an edit that moved a pin - and otherwise re-fitted

@@ -1,0 +1,50 @@
+// MotionSource: an earlier motion a solve starts from when its variables cannot be restored
+// one for one (SpacetimeProblem::initializeFrom re-fits it to the new transcription). Two kinds:
+// another problem's solution (a finer transcription, an edited scene: exact splines and the
+// solver's own forces), and a sampled Animation (a motion.json read back without the solver
+// state beside it: joint positions and velocities interpolated between frames, the recovered
+// ground forces per point). Characters are matched by id and dof count, contacts by term id and
+// point count; what has no counterpart keeps the problem's default guess.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace spacetime {
+
+class SpacetimeProblem;
+struct Animation;
+
+class MotionSource {
+ public:
+  virtual ~MotionSource() = default;
+  // The span of time the motion covers; times outside it read its ends.
+  virtual double start() const = 0;
+  virtual double end() const = 0;
+  // The index of the character with this id and this many dofs, -1 if there is none.
+  virtual int character(const std::string& id, int dofs) const = 0;
+  // Joint positions (order 0) or velocities (order 1) of character c at t; `before`: the left
+  // limit at a touch-down's impact, where the velocities jump.
+  virtual Eigen::VectorXd jointState(int c, double t, int order, bool before = false) const = 0;
+  // The interval of the contact with this term id, if the motion has one.
+  virtual std::optional<std::pair<double, double>> contactInterval(const std::string& term) const = 0;
+  // The world force on each of its `points` points at t (empty when the motion has no such
+  // contact, or it has another number of points or force components: `forceDims` per point).
+  virtual std::vector<Eigen::Vector3d> contactForces(const std::string& term, int points, int forceDims,
+                                                     double t) const = 0;
+  // Where each point rests on the ground (world x, z; 2 values per point), empty if unknown.
+  virtual std::vector<double> anchors(const std::string& term, int points, int forceDims) const = 0;
+  // Each point's world impulse at the touch-down, empty without one.
+  virtual std::vector<Eigen::Vector3d> impulses(const std::string& term, int points, int forceDims) const = 0;
+};
+
+// The solution `problem` holds now (it must outlive the source).
+std::unique_ptr<MotionSource> motionSourceOf(const SpacetimeProblem& problem);
+// A sampled motion (it must outlive the source); frames in increasing time.
+std::unique_ptr<MotionSource> motionSourceOf(const Animation& animation);
+
+}  // namespace spacetime
