@@ -117,6 +117,17 @@ CharacterAnimation character(const json& j, const std::string& at) {
   ca.q = rows(field(j, "q", at), frames, n, at + "q");
   ca.qd = rows(field(j, "qd", at), frames, n, at + "qd");
   ca.qdBefore = ca.qd;
+  if (j.contains("qdBefore")) {  // q-dot's left limit at the frames where it differs (impacts)
+    const json& before = j["qdBefore"];
+    if (!before.is_array()) throw FieldError(at + "qdBefore", "expected an array");
+    for (size_t k = 0; k < before.size(); ++k) {
+      const std::string entry = at + "qdBefore[" + std::to_string(k) + "]";
+      const json& frame = field(before[k], "frame", entry + ".");
+      if (!frame.is_number_integer() || frame.get<long>() < 0 || frame.get<size_t>() >= frames)
+        throw FieldError(entry + ".frame", "expected a frame index below " + std::to_string(frames));
+      ca.qdBefore.row(frame.get<Eigen::Index>()) = rows(json::array({field(before[k], "qd", entry + ".")}), 1, n, entry + ".qd");
+    }
+  }
   if (j.contains("qdd")) ca.qdd = rows(j["qdd"], frames, n, at + "qdd");
   if (j.contains("tau")) ca.tau = rows(j["tau"], frames, n, at + "tau");
   if (j.contains("actuated") && j["actuated"].is_array())

@@ -229,6 +229,17 @@ std::string motionJson(const Animation& animation) {
     jc["q"] = rows(c.q);
     jc["qd"] = rows(c.qd);
     jc["qdd"] = rows(c.qdd);
+    // q-dot's left limit where it differs from qd: the frames at a touch-down's impact (at the
+    // root's other breakpoints the two sides differ by rounding only, ~1e-15).
+    json before = json::array();
+    if (c.qdBefore.rows() == c.qd.rows())
+      for (Eigen::Index f = 0; f < c.qd.rows(); ++f)
+        if ((c.qdBefore.row(f) - c.qd.row(f)).cwiseAbs().maxCoeff() > 1e-9 * (1 + c.qd.row(f).cwiseAbs().maxCoeff())) {
+          json row = json::array();
+          for (Eigen::Index d = 0; d < c.qd.cols(); ++d) row.push_back(c.qdBefore(f, d));
+          before.push_back({{"frame", f}, {"qd", row}});
+        }
+    jc["qdBefore"] = before;
     jc["tau"] = rows(c.tau);
     json contacts = json::array();
     for (const ContactTrack& t : c.contacts) {

@@ -55,6 +55,10 @@ TEST(MotionImport, RoundTripsTheWrittenMotion) {
   EXPECT_EQ(b.q, a.q);
   EXPECT_EQ(b.qd, a.qd);
   EXPECT_EQ(b.tau, a.tau);
+  // q-dot's left limit: written where it differs (the landing's impact), rounding elsewhere.
+  ASSERT_EQ(b.qdBefore.rows(), a.qdBefore.rows());
+  EXPECT_LT((b.qdBefore - a.qdBefore).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT((b.qdBefore - b.qd).cwiseAbs().maxCoeff(), 1);
   ASSERT_EQ(b.contacts.size(), a.contacts.size());
   for (size_t k = 0; k < a.contacts.size(); ++k) {
     EXPECT_EQ(b.contacts[k].term, a.contacts[k].term);
@@ -70,53 +74,88 @@ TEST(MotionImport, RoundTripsTheWrittenMotion) {
   EXPECT_FALSE(looksLikeMotionJson(sceneToJson(jump.problem->scene())));
 }
 
-// The jump's motion at 1 kHz fitted to a fresh problem of its scene: the joints' B-splines and the
-// root's Hermite data follow the frames (linear between them: an error of h^2/8 |q''|, ~1e-5 rad
-// at 1 ms and the push-off's accelerations), each contact's resultant at its samples is the
-// solved one to the same interpolation (the file holds the ground forces recovered per point,
-// which split the same resultant), and sqp from there ends at the solved optimum within a few steps.
+// The jump's motion at 1 kHz (spacetime-cli's motion.json) and at 120 Hz (the editor's export)
+// fitted to a fresh problem of its scene: the joints' B-splines and the root's Hermite data follow
+// the frames (cubic Hermite between them, each side of the landing's velocity jump read from its
+// own frames), each contact's resultant at its samples is the solved one (re-balanced on the
+// fitted motion: read linearly between 120 Hz frames it was 0.10 x weight off before the
+// lift-off), and sqp from there ends at the solved optimum within a few steps.
 TEST(MotionImport, AFittedMotionRestartsTheSolveAtItsOptimum) {
   const SolvedJump& jump = solvedJump();
   ASSERT_TRUE(jump.summary.converged) << jump.summary.reason;
-  const MotionLoadResult read = parseMotionJson(motionJson(sampleAnimation(*jump.problem, 1000)), "motion.json");
+  for (double rate : {1000.0, 120.0}) {
+    SCOPED_TRACE(rate);
+    const MotionLoadResult read = parseMotionJson(motionJson(sampleAnimation(*jump.problem, rate)), "motion.json");
+    ASSERT_TRUE(read.animation) << read.error;
+    std::string error;
+    auto fresh = SpacetimeProblem::build(jump.problem->scene(), &error);
+    ASSERT_TRUE(fresh) << error;
+    ASSERT_EQ(startFromMotion(*fresh, *read.animation), 1);
+
+    double worstQ = 0, worstQd = 0;
+    for (double t : fresh->transcription().denseGrid(4)) {
+      worstQ = std::max(worstQ, (fresh->jointState(0, t, 0) - jump.problem->jointState(0, t, 0)).cwiseAbs().maxCoeff());
+      worstQd = std::max(worstQd, (fresh->jointStateBefore(0, t, 1) - jump.problem->jointStateBefore(0, t, 1)).cwiseAbs().maxCoeff());
+    }
+    // Measured at both rates: q 4.6e-6 (at the clip's start, the joints' least-squares fit), q-dot
+    // 6.8e-4, the resultants 2.1e-4 x weight.
+    EXPECT_LT(worstQ, 1e-5);
+    EXPECT_LT(worstQd, 1e-3);
+    const double weight = fresh->characters()[0].weight;
+    double worstForce = 0;
+    for (size_t j = 0; j < fresh->contacts().size(); ++j)
+      for (double t : fresh->contacts()[j].times) {
+        Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+        for (const Eigen::Vector3d& f : fresh->contactForces(static_cast<int>(j), t)) a += f;
+        for (const Eigen::Vector3d& f : jump.problem->contactForces(static_cast<int>(j), t)) b += f;
+        worstForce = std::max(worstForce, (a - b).norm() / weight);
+      }
+    EXPECT_LT(worstForce, 1e-3);
+
+    SolverOptions o = sqp();
+    o.warmStart = true;
+    const SolverSummary s = solveSpacetime(*fresh, o);
+    ASSERT_TRUE(s.converged) << s.reason;
+    EXPECT_LE(s.sqpSteps, 3) << s.reason;
+    EXPECT_EQ(s.iterations, 0) << s.reason;
+    EXPECT_NEAR(s.objective, jump.summary.objective, 1e-6 * jump.summary.objective);
+  }
+  const MotionLoadResult read = parseMotionJson(motionJson(sampleAnimation(*jump.problem, 100)), "motion.json");
   ASSERT_TRUE(read.animation) << read.error;
   std::string error;
-  auto fresh = SpacetimeProblem::build(jump.problem->scene(), &error);
-  ASSERT_TRUE(fresh) << error;
-  ASSERT_EQ(fresh->initializeFrom(*motionSourceOf(*read.animation)), 1);
-
-  double worstQ = 0;
-  for (double t : fresh->transcription().denseGrid(4))
-    worstQ = std::max(worstQ, (fresh->jointState(0, t, 0) - jump.problem->jointState(0, t, 0)).cwiseAbs().maxCoeff());
-  EXPECT_LT(worstQ, 1e-4);
-  const double weight = fresh->characters()[0].weight;
-  double worstForce = 0;
-  for (size_t j = 0; j < fresh->contacts().size(); ++j)
-    for (double t : fresh->contacts()[j].times) {
-      Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-      for (const Eigen::Vector3d& f : fresh->contactForces(static_cast<int>(j), t)) a += f;
-      for (const Eigen::Vector3d& f : jump.problem->contactForces(static_cast<int>(j), t)) b += f;
-      worstForce = std::max(worstForce, (a - b).norm() / weight);
-    }
-  // 1.75e-3 measured, at 0.39 s: the push-off's forces fall fastest before the lift-off at 0.4 s,
-  // and a sample between two frames reads their line across the kink the solver's forces (linear
-  // between samples) have there.
-  EXPECT_LT(worstForce, 3e-3);
-
-  SolverOptions o = sqp();
-  o.warmStart = true;
-  const SolverSummary s = solveSpacetime(*fresh, o);
-  ASSERT_TRUE(s.converged) << s.reason;
-  EXPECT_LE(s.sqpSteps, 3) << s.reason;
-  EXPECT_EQ(s.iterations, 0) << s.reason;
-  EXPECT_NEAR(s.objective, jump.summary.objective, 1e-6 * jump.summary.objective);
   // Nothing in common: a motion of another character leaves the default guess.
   Animation other = *read.animation;
   other.characters[0].name = "someone_else";
   auto untouched = SpacetimeProblem::build(jump.problem->scene(), &error);
   const std::vector<double> guess = untouched->variables();
-  EXPECT_EQ(untouched->initializeFrom(*motionSourceOf(other)), 0);
+  EXPECT_EQ(startFromMotion(*untouched, other), 0);
   EXPECT_EQ(untouched->variables(), guess);
+}
+
+// The sampled motion reads each side of the landing's velocity jump from its own frames, also at
+// instants a rounding away from the landing's frame (120 Hz frame 96 is at 0.7999999999999999 s,
+// the impact at 0.8 s): the after side is the frame's q-dot, the before side its left limit.
+TEST(MotionImport, ReadsEachSideOfTheLandingImpact) {
+  const SolvedJump& jump = solvedJump();
+  const Animation a = sampleAnimation(*jump.problem, 120);
+  const MotionLoadResult read = parseMotionJson(motionJson(a), "motion.json");
+  ASSERT_TRUE(read.animation) << read.error;
+  const std::unique_ptr<MotionSource> source = motionSourceOf(*read.animation);
+  const CharacterAnimation& ca = a.characters[0];
+  ASSERT_NEAR(ca.times[96], 0.8, 1e-15);
+  const double jump96 = (ca.qdBefore.row(96) - ca.qd.row(96)).cwiseAbs().maxCoeff();
+  ASSERT_GT(jump96, 1);  // the root's velocity jumps there
+  for (double t : {ca.times[96], 0.8, 0.8 - 1e-13, 0.8 + 1e-13}) {
+    SCOPED_TRACE(t);
+    EXPECT_LT((source->jointState(0, t, 1, false) - jump.problem->jointState(0, 0.8, 1)).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((source->jointState(0, t, 1, true) - jump.problem->jointStateBefore(0, 0.8, 1)).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((source->jointState(0, t, 0, false) - jump.problem->jointState(0, 0.8, 0)).cwiseAbs().maxCoeff(), 1e-9);
+  }
+  // Between frames: the cubic Hermite's error, far below linear interpolation's h^2/8 |q''|.
+  double worst = 0;
+  for (double t = 0.01; t < 1.19; t += 0.00137)
+    worst = std::max(worst, (source->jointState(0, t, 0) - jump.problem->jointState(0, t, 0)).cwiseAbs().maxCoeff());
+  EXPECT_LT(worst, 1e-5);
 }
 
 TEST(MotionImport, AMalformedFileNamesTheField) {

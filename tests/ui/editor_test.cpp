@@ -310,6 +310,56 @@ class EditorTest : public QObject {
     QCOMPARE((a - b).cwiseAbs().maxCoeff(), 0.0);  // the same variables give the same motion
   }
 
+  // File > Import > Start from Motion: the jump's motion exported by one window (its 120 Hz
+  // display samples) starts another window's scene near the same motion - fitted, within 1e-4 of
+  // every displayed q - and its solve, sqp since the file has no multipliers, ends at the same
+  // objective in a few steps. A malformed file and a motion of another character are refused
+  // with the reason, the motion on show unchanged.
+  void aMotionFileStartsTheSolveAtItsOptimum() {
+    QTemporaryDir dir;
+    MainWindow w;
+    QVERIFY(openScene(w, ":/scenes/luxo_jump.json"));
+    w.solve();
+    QVERIFY(w.solverJob()->waitForFinished(scaled(120000)));
+    QVERIFY(w.document()->motion() && w.document()->motion()->converged);
+    const double objective = w.document()->motion()->objective;
+    QString error;
+    QVERIFY2(w.exportMotionJson(dir.filePath("motion.json"), &error), qPrintable(error));
+
+    MainWindow v;
+    QVERIFY(openScene(v, ":/scenes/luxo_jump.json"));
+    v.setAutoSolve(false);
+    QVERIFY2(v.importMotionJson(dir.filePath("motion.json"), &error), qPrintable(error));
+    const std::shared_ptr<const SolvedMotion> fitted = v.document()->motion();
+    QVERIFY(fitted && fitted->fromMotionFile && !fitted->solved);
+    const Eigen::MatrixXd& a = w.document()->motion()->animation.characters[0].q;
+    const Eigen::MatrixXd& b = fitted->animation.characters[0].q;
+    QCOMPARE(a.rows(), b.rows());
+    QVERIFY2((a - b).cwiseAbs().maxCoeff() < 1e-4, qPrintable(QString::number((a - b).cwiseAbs().maxCoeff())));
+    QVERIFY(v.statusText().contains("Started from motion.json"));
+    v.solve();
+    QVERIFY(v.solverJob()->waitForFinished(scaled(120000)));
+    const std::shared_ptr<const SolvedMotion> solved = v.document()->motion();
+    QVERIFY(solved && solved->converged && !solved->fromMotionFile);
+    QVERIFY2(QString::fromStdString(solved->reason).contains(QRegularExpression("after [1-3] SQP steps")),
+             solved->reason.c_str());
+    QVERIFY2(std::abs(solved->objective - objective) < 1e-6 * objective,
+             qPrintable(QString("%1 against %2").arg(solved->objective, 0, 'g', 12).arg(objective, 0, 'g', 12)));
+
+    QFile bad(dir.filePath("bad.json"));
+    QVERIFY(bad.open(QIODevice::WriteOnly));
+    bad.write("{\"formatVersion\": 1, \"characters\": [{\"name\": \"luxo\"}]}");
+    bad.close();
+    QVERIFY(!v.importMotionJson(dir.filePath("bad.json"), &error));
+    QVERIFY2(error.contains("field 'characters[0].dofs': missing required field"), qPrintable(error));
+    MainWindow particle;
+    QVERIFY(solvedParticle(particle));
+    QVERIFY2(particle.exportMotionJson(dir.filePath("particle.json"), &error), qPrintable(error));
+    QVERIFY(!v.importMotionJson(dir.filePath("particle.json"), &error));
+    QVERIFY2(error.contains("holds no character of this scene"), qPrintable(error));
+    QCOMPARE(v.document()->motion(), solved);
+  }
+
   // Every export of a solved motion writes its file: motion JSON and CSV, URDF, glTF, and a BVH
   // with one frame per displayed sample.
   void exportsWriteEveryFormat() {

@@ -31,7 +31,9 @@
 #include "interop/urdf_export.h"
 #include "interop/bvh_export.h"
 #include "interop/gltf_export.h"
+#include "interop/motion_import.h"
 #include "interop/outputs.h"
+#include "solver/motion_source.h"
 
 namespace spacetime::ui {
 
@@ -292,6 +294,12 @@ void MainWindow::createActions() {
   // Blender's and most editors' binding, whatever the platform theme maps SaveAs to.
   saveAsAction->setShortcuts(withKeys(QKeySequence::keyBindings(QKeySequence::SaveAs), {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S)}));
   file->addSeparator();
+  QMenu* importMenu = file->addMenu(tr("&Import"));
+  action(importMenu, tr("Start from Motion (JSON)…"), QKeySequence(), [this] {
+    const QString path = QFileDialog::getOpenFileName(this, tr("Start from a motion"), QString(), tr("Motion (*.json)"));
+    QString error;
+    if (!path.isEmpty() && !importMotionJson(path, &error)) QMessageBox::warning(this, tr("Start from a motion"), error);
+  });
   QMenu* exportMenu = file->addMenu(tr("&Export"));
   auto exportTo = [this](const QString& title, const QString& name, const QString& filter,
                          bool (MainWindow::*fn)(const QString&, QString*)) {
@@ -462,7 +470,11 @@ void MainWindow::solve() {
     warm = doc_.motion()->state;
     warmScene = doc_.motion()->scene;
   }
-  job_.start(doc_.scene(), warm, warmScene);
+  // A motion fitted to a motion file has no multipliers: the augmented Lagrangian would start its
+  // whole path over from it, where sqp's programs compute them (docs/design.md, Solver item 4).
+  std::optional<SolverMethod> method;
+  if (doc_.motion() && doc_.motion()->fromMotionFile && doc_.scene().solver.method == "al") method = SolverMethod::Sqp;
+  job_.start(doc_.scene(), warm, warmScene, method);
   solveAction_->setEnabled(false);
   stopAction_->setEnabled(true);
   progress_->setText(tr("Solving…"));
@@ -490,6 +502,40 @@ void MainWindow::setAutoSolve(bool on) {
   if (autoSolveAction_->isChecked() != on) autoSolveAction_->setChecked(on);
   // A motion that already solves the scene would only be found again.
   if (on && !doc_.showsSolutionOfScene()) solve();
+}
+
+bool MainWindow::importMotionJson(const QString& path, QString* error) {
+  const MotionLoadResult loaded = loadMotionFile(path.toStdString());
+  if (!loaded.animation) {
+    *error = QString::fromStdString(loaded.error);
+    return false;
+  }
+  std::string why;
+  std::unique_ptr<SpacetimeProblem> problem = SpacetimeProblem::build(doc_.scene(), &why);
+  if (!problem) {
+    *error = tr("The scene cannot be solved: %1").arg(QString::fromStdString(why));
+    return false;
+  }
+  if (startFromMotion(*problem, *loaded.animation) == 0) {
+    QStringList theirs;
+    for (const CharacterAnimation& c : loaded.animation->characters)
+      theirs << QString("%1 (%2 dofs)").arg(QString::fromStdString(c.name)).arg(c.q.cols());
+    *error = tr("%1 holds no character of this scene (they are matched by id and number of dofs): it has %2")
+                 .arg(QDir::toNativeSeparators(path), theirs.join(", "));
+    return false;
+  }
+  job_.cancel();
+  auto fitted = sampleMotion(*problem);
+  const ProblemMeasures m = measure(*problem);
+  fitted->objective = m.objective;
+  fitted->maxViolation = m.maxViolation;
+  fitted->fromMotionFile = true;
+  doc_.setMotion(fitted);
+  progress_->setText(tr("Started from %1: fitted to this scene (largest constraint violation %2); Solve refines it")
+                         .arg(QFileInfo(path).fileName())
+                         .arg(m.maxViolation, 0, 'g', 3));
+  if (autoSolve_) solve();
+  return true;
 }
 
 bool MainWindow::exportMotionJson(const QString& path, QString* error) {

@@ -75,7 +75,7 @@ bool SolverJob::waitForFinished(int timeoutMs) {
 }
 
 void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmStart,
-                      std::shared_ptr<const Scene> warmScene) {
+                      std::shared_ptr<const Scene> warmScene, std::optional<SolverMethod> method) {
   if (current_) {
     current_->cancel = true;
     current_->superseded = true;
@@ -88,7 +88,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   ++alive_;
   QPointer<SolverJob> self(this);
   const int threadCount = threads, liveInterval = liveIntervalMs;
-  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, threadCount, liveInterval]() {
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, method, threadCount, liveInterval]() {
     // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
     // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
     // SCHED_IDLE runs it only on otherwise idle time; nice 15 alone was not enough once the
@@ -119,6 +119,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       fail(error);
     } else {
       SolverOptions options = solverOptionsFor(scene.solver);
+      if (method) options.method = *method;
       options.threads = threadCount;
       options.warmStart = warmStart && (warmScene ? problem->warmStartFrom(*warmScene, *warmStart) != SpacetimeProblem::WarmStart::None
                                                   : problem->restore(*warmStart));

@@ -55,6 +55,12 @@ class MainWindow : public QMainWindow {
   bool autoSolve() const { return autoSolve_; }
   bool solveOnOpen = true;  // solve a scene that has no stored solution as soon as it opens
 
+  // Starts from a motion file (motion.json, as the export below or spacetime-cli write it): its
+  // sampled motion and contact forces fitted to the scene's transcription go on show, and the
+  // next solve (at once with auto-solve) refines it by sqp. False with the reason: a malformed
+  // file (the field named), a scene that cannot be built, no character in common.
+  bool importMotionJson(const QString& path, QString* error);
+
   // Exports (no dialogs).
   bool exportMotionJson(const QString& path, QString* error);
   bool exportMotionCsv(const QString& path, QString* error);

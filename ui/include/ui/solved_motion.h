@@ -30,6 +30,9 @@ struct SolvedMotion {
   double maxViolation = 0;
   int iterations = 0;
   bool solved = false;     // false: the initial guess, or an iterate still being refined
+  // Fitted to a motion file's samples (File > Import): `state` holds no multipliers, which the
+  // augmented Lagrangian's warm start needs, so the next solve runs sqp (MainWindow::solve).
+  bool fromMotionFile = false;
   bool converged = false;  // the final solve met its tolerance
   std::string reason;      // why the solve stopped (final motions)
   // The constraints a final solve left unmet, largest first (empty when it converged): when the

@@ -32,8 +32,9 @@ class SolverJob : public QObject {
   // guess). The scene is validated as a file would be; an invalid one ends in failed().
   // Warm start: `warmStart` is restored when the problem has its shape; otherwise, with the
   // scene it was solved for, its motion is re-fitted (SpacetimeProblem::initializeFrom).
+  // `method` replaces the scene's solver.method for this solve.
   void start(const Scene& scene, std::optional<SolutionState> warmStart = std::nullopt,
-             std::shared_ptr<const Scene> warmScene = nullptr);
+             std::shared_ptr<const Scene> warmScene = nullptr, std::optional<SolverMethod> method = std::nullopt);
   void cancel();
   bool isRunning() const { return running_ > 0; }
   // Blocks (processing events) until no solve runs and its result is delivered; false on
