@@ -1,6 +1,6 @@
 // Reading motion.json back into an Animation (see motion_import.h). Every field the writer
 // (outputs.cpp, motionJson) puts there is checked: a wrong one is named with its path, e.g.
-// "characters[0].q[12]: expected 6 numbers".
+// "field 'characters[0].q[12]': expected 6 numbers, one per dof".
 #include "interop/motion_import.h"
 
 #include <cmath>

@@ -59,7 +59,8 @@ class ProblemMotion final : public MotionSource {
 };
 
 // A sampled motion. A frame at an impact's instant holds the velocity after it (as
-// sampleAnimation writes it); the left limit there is a step from the frame before.
+// sampleAnimation writes it) and qdBefore the left limit (a motion file written before it had
+// that field: a step from the frame before).
 class AnimationMotion final : public MotionSource {
  public:
   explicit AnimationMotion(const Animation& a) : a_(a) {}
@@ -68,7 +69,9 @@ class AnimationMotion final : public MotionSource {
   int character(const std::string& id, int dofs) const override {
     for (size_t c = 0; c < a_.characters.size(); ++c) {
       const CharacterAnimation& ca = a_.characters[c];
-      if (ca.name == id) return ca.q.cols() == dofs && !ca.times.empty() ? static_cast<int>(c) : -1;
+      const bool frames = ca.times.size() >= 2 && ca.q.rows() == static_cast<Eigen::Index>(ca.times.size()) &&
+                          ca.qd.rows() == ca.q.rows();
+      if (ca.name == id) return ca.q.cols() == dofs && frames ? static_cast<int>(c) : -1;
     }
     return -1;
   }
