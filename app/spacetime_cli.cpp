@@ -246,7 +246,7 @@ int run(int argc, char** argv) {
     options.warmStart = matched > 0;
     // A motion file has no multipliers. The augmented Lagrangian's warm start needs them (its
     // Newton polish takes its active set from them): from the jump's own motion it re-ran its
-    // whole path, 315-375 LM iterations to another optimum, where sqp's first program computes
+    // whole path, 375 LM iterations to another optimum, where sqp's first program computes
     // them and its steps end at the motion's optimum in 1-3 (docs/design.md, Solver item 4). So
     // the scene's `al` becomes `sqp` here; an explicit --method is kept.
     const bool toSqp = matched > 0 && method.empty() && options.method == SolverMethod::AugmentedLagrangian;

@@ -12,6 +12,7 @@
 #   scripts/measure.sh characters the methods on the biped, the quadruped and the humanoid only
 #   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
 #   scripts/measure.sh speedlimits the jump under joint speed limits only (about 10 minutes)
+#   scripts/measure.sh motionstarts solves started from a motion.json alone only (about 2 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli spacetime > /dev/null
@@ -99,6 +100,37 @@ editor_solves() {
   done
 }
 [ "${1:-}" = editor ] && { editor_solves; exit 0; }
+
+# Solves started from a motion.json alone (spacetime-cli --init, no scene.json beside it): each
+# scene solved cold, its motion.json (at RATE frames per second) moved away, the scene solved
+# again from it - by sqp, as the CLI chooses for a scene whose method is al, and by al when asked.
+motion_starts() {
+  echo
+  echo "## Solves from a motion file alone (spacetime-cli solve SCENE --init motion.json, 2 threads, single runs)"
+  echo
+  echo "| scene | motion's frames per second | method | SQP steps + Newton steps | LM iterations | objective | cold objective | seconds |"
+  echo "|---|---|---|---|---|---|---|---|"
+  local name rate method
+  for run in luxo_jump:1000:auto luxo_jump:120:auto luxo_jump:60:auto luxo_jump:24:auto luxo_jump:1000:al \
+             luxo_hurdle:1000:auto luxo_3d:1000:auto biped_jump:1000:auto; do
+    IFS=: read -r name rate method <<< "$run"
+    [ -d "$tmp/cold_$name" ] || build/app/spacetime-cli solve "resources/scenes/$name.json" --out "$tmp/cold_$name" --quiet --max-seconds 300 2> /dev/null || true
+    rm -rf "$tmp/rated" "$tmp/lone" "$tmp/from_motion"
+    build/app/spacetime-cli solve "$tmp/cold_$name/scene.json" --out "$tmp/rated" --quiet --rate "$rate" 2> /dev/null || true
+    mkdir -p "$tmp/lone" && cp "$tmp/rated/motion.json" "$tmp/lone/"
+    local extra=()
+    [ "$method" = auto ] || extra=(--method "$method")
+    build/app/spacetime-cli solve "resources/scenes/$name.json" --out "$tmp/from_motion" --init "$tmp/lone/motion.json" \
+      "${extra[@]}" --quiet --max-seconds 300 2> /dev/null || true
+    python3 - "$tmp/from_motion/summary.json" "$tmp/cold_$name/summary.json" "$name" "$rate" <<'PY'
+import json, sys
+s, cold = (json.load(open(p)) for p in sys.argv[1:3])
+print(f"| {sys.argv[3]} | {sys.argv[4]} | {s['method']} | {s['sqp_steps']} + {s['newton_steps']} | {s['iterations']} | "
+      f"{s['objective']:.6f} | {cold['objective']:.6f} | {s['solve_seconds']:.2f} |")
+PY
+  done
+}
+[ "${1:-}" = motionstarts ] && { motion_starts; exit 0; }
 
 # The shipped jump with a speed limit on every joint (docs/validation.md, "Not yet holding"):
 # 30 rad/s from the default guess, then the limit stepped down, each step from the last step's
@@ -264,3 +296,4 @@ PY
 done
 
 methods_tables
+motion_starts
