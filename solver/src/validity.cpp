@@ -38,27 +38,39 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
   const Model<double>& model = *problem.characters()[c].model;
   const int n = model.dofCount();
   Data<double> data(model);
-  auto torque = [&](double t) {
-    Eigen::VectorXd tau = generalizedForcesAt(problem, c, t);
-    for (int d = 0; d < n; ++d)
-      if (!model.bodies[model.dofBody[d]].actuated) tau[d] = 0;
-    return tau;
+  // What acts at time t: the actuated joints' torques and the ground's point forces (none inside
+  // a flight; at its ends those of the contacts that end or begin there), from one NNLS.
+  struct Loads {
+    Eigen::VectorXd tau;
+    std::vector<PointForce<double>> ground;
   };
-  auto accel = [&](double t, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-    const Eigen::VectorXd tau = torque(t);
-    return aba(model, data, q.data(), qd.data(), tau.data(), groundPointForcesAt(problem, c, t));
+  auto loadsAt = [&](double t) {
+    const GroundForces forces = groundForcesAt(problem, c, t);
+    Loads l{generalizedForcesAt(problem, c, t, &forces), groundPointForcesAt(problem, c, t, &forces)};
+    for (int d = 0; d < n; ++d)
+      if (!model.bodies[model.dofBody[d]].actuated) l.tau[d] = 0;
+    return l;
+  };
+  auto accel = [&](const Loads& l, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    return aba(model, data, q.data(), qd.data(), l.tau.data(), l.ground);
   };
   const int steps = std::max(10, static_cast<int>(std::ceil((t1 - t0) / 5e-4)));
   const double h = (t1 - t0) / steps;
   Eigen::VectorXd q = problem.jointState(c, t0, 0), qd = problem.jointState(c, t0, 1);
   check.maxPositionError = 0;
+  // The loads depend on time alone: RK4's two midpoint stages share theirs, and a step's end is
+  // the next step's start, so each step evaluates two sets (the RNEA and the NNLS behind them
+  // cost more than the ABA).
+  Loads start = loadsAt(t0);
   for (int s = 0; s < steps; ++s) {
     if (cancel && cancel->load(std::memory_order_relaxed)) return;
     const double t = t0 + s * h;
-    const Eigen::VectorXd k1v = qd, k1a = accel(t, q, qd);
-    const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(t + 0.5 * h, q + 0.5 * h * k1v, k2v);
-    const Eigen::VectorXd k3v = qd + 0.5 * h * k2a, k3a = accel(t + 0.5 * h, q + 0.5 * h * k2v, k3v);
-    const Eigen::VectorXd k4v = qd + h * k3a, k4a = accel(t + h, q + h * k3v, k4v);
+    const Loads mid = loadsAt(t + 0.5 * h), end = loadsAt(t + h);
+    const Eigen::VectorXd k1v = qd, k1a = accel(start, q, qd);
+    const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(mid, q + 0.5 * h * k1v, k2v);
+    const Eigen::VectorXd k3v = qd + 0.5 * h * k2a, k3a = accel(mid, q + 0.5 * h * k2v, k3v);
+    const Eigen::VectorXd k4v = qd + h * k3a, k4a = accel(end, q + h * k3v, k4v);
+    start = end;
     q += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
     qd += h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
     const double error = (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff();
