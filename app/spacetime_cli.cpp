@@ -21,7 +21,6 @@
 #include <new>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -183,17 +182,21 @@ int run(int argc, char** argv) {
       return 2;
     }
     std::string text;
-    if (readWholeFile(initPath, &text, &error) && looksLikeMotionJson(text)) {
+    if (!readWholeFile(initPath, &text, &error)) {
+      std::fprintf(stderr, "spacetime-cli: --init: %s\n", error.c_str());
+      return 2;
+    }
+    MotionLoadResult motion = parseMotionJson(text, initPath);
+    if (motion.motionFile) {
       // A motion file without its run's scene.json (copied out, or written by another tool in
       // the same contract): its sampled motion and contact forces, re-fitted below.
-      MotionLoadResult motion = parseMotionJson(text, initPath);
       if (!motion.animation) {
         std::fprintf(stderr, "spacetime-cli: --init: %s\n", motion.error.c_str());
         return 2;
       }
       startMotion = std::move(motion.animation);
     } else {
-      const SceneLoadResult init = loadSceneFile(initPath);
+      const SceneLoadResult init = parseScene(text, initPath);
       if (!init.scene) {
         std::fprintf(stderr, "spacetime-cli: --init: %s\n", init.error.c_str());
         return 2;
@@ -244,13 +247,10 @@ int run(int argc, char** argv) {
   if (startMotion) {
     const int matched = startFromMotion(*problem, *startMotion);
     options.warmStart = matched > 0;
-    // A motion file has no multipliers. The augmented Lagrangian's warm start needs them (its
-    // Newton polish takes its active set from them): from the jump's own motion it re-ran its
-    // whole path, 375 LM iterations to another optimum, where sqp's first program computes
-    // them and its steps end at the motion's optimum in 1-3 (docs/design.md, Solver item 4). So
-    // the scene's `al` becomes `sqp` here; an explicit --method is kept.
-    const bool toSqp = matched > 0 && method.empty() && options.method == SolverMethod::AugmentedLagrangian;
-    if (toSqp) options.method = SolverMethod::Sqp;
+    // The scene's method as methodForMotionStart chooses it (a motion file has no multipliers);
+    // an explicit --method is kept.
+    const bool toSqp = matched > 0 && method.empty() && methodForMotionStart(options.method) != options.method;
+    if (toSqp) options.method = methodForMotionStart(options.method);
     if (!quiet)
       std::fprintf(stderr, "starting from %s: %s%s\n", initPath.c_str(),
                    matched > 0 ? "its sampled motion and contact forces, fitted to this transcription (a motion file "

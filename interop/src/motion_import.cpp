@@ -140,16 +140,18 @@ CharacterAnimation character(const json& j, const std::string& at) {
   return ca;
 }
 
-}  // namespace
-
-bool looksLikeMotionJson(const std::string& text) {
-  const json j = json::parse(text, nullptr, false);
+bool motionShaped(const json& j) {
   return j.is_object() && j.contains("formatVersion") && j.contains("characters") && !j.contains("format");
 }
+
+}  // namespace
+
+bool looksLikeMotionJson(const std::string& text) { return motionShaped(json::parse(text, nullptr, false)); }
 
 MotionLoadResult parseMotionJson(const std::string& text, const std::string& sourceName) {
   const json root = json::parse(text, nullptr, false);
   if (root.is_discarded()) return {std::nullopt, sourceName + ": not valid JSON"};
+  const bool motionFile = motionShaped(root);
   try {
     const json& version = field(root, "formatVersion", "");
     if (!version.is_number_integer() || version.get<int>() != 1)
@@ -159,9 +161,9 @@ MotionLoadResult parseMotionJson(const std::string& text, const std::string& sou
     Animation a;
     for (size_t c = 0; c < chars.size(); ++c)
       a.characters.push_back(character(chars[c], "characters[" + std::to_string(c) + "]."));
-    return {std::move(a), {}};
+    return {std::move(a), {}, motionFile};
   } catch (const FieldError& e) {
-    return {std::nullopt, sourceName + ": field '" + e.path + "': " + e.what()};
+    return {std::nullopt, sourceName + ": field '" + e.path + "': " + e.what(), motionFile};
   }
 }
 

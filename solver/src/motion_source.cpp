@@ -136,19 +136,13 @@ class AnimationMotion final : public MotionSource {
   std::vector<Eigen::Vector3d> contactForces(const std::string& term, int points, int forceDims,
                                              double t) const override {
     std::vector<Eigen::Vector3d> out;
-    for (const auto& [ca, track] : tracks(term, points, forceDims)) {
-      Eigen::MatrixXd f(static_cast<Eigen::Index>(track->force.size()), 3);
-      for (size_t k = 0; k < track->force.size(); ++k) f.row(static_cast<Eigen::Index>(k)) = track->force[k].transpose();
-      out.push_back(interpolate(ca->times, f, t));
-    }
+    for (const auto& [ca, track] : tracks(term, points, forceDims)) out.push_back(interpolate(ca->times, track->force, t));
     return out;
   }
   std::vector<double> anchors(const std::string& term, int points, int forceDims) const override {
     std::vector<double> out;
     for (const auto& [ca, track] : tracks(term, points, forceDims)) {
-      Eigen::MatrixXd p(static_cast<Eigen::Index>(track->position.size()), 3);
-      for (size_t k = 0; k < track->position.size(); ++k) p.row(static_cast<Eigen::Index>(k)) = track->position[k].transpose();
-      const Eigen::VectorXd w = interpolate(ca->times, p, track->start);
+      const Eigen::Vector3d w = interpolate(ca->times, track->position, track->start);
       out.push_back(w.x());
       out.push_back(w.z());
     }
@@ -187,13 +181,13 @@ class AnimationMotion final : public MotionSource {
     if (found != points) return {};
     return out;
   }
-  // Row-wise linear interpolation of m (one row per frame time) at t, clamped to the frames.
-  static Eigen::VectorXd interpolate(const std::vector<double>& times, const Eigen::MatrixXd& m, double t) {
-    if (t <= times.front()) return m.row(0).transpose();
-    if (t >= times.back()) return m.row(m.rows() - 1).transpose();
+  // Linear interpolation of a track's values (one per frame time) at t, clamped to the frames.
+  static Eigen::Vector3d interpolate(const std::vector<double>& times, const std::vector<Eigen::Vector3d>& v, double t) {
+    if (t <= times.front()) return v.front();
+    if (t >= times.back()) return v.back();
     const size_t i = static_cast<size_t>(std::upper_bound(times.begin(), times.end(), t) - times.begin()) - 1;
     const double u = (t - times[i]) / (times[i + 1] - times[i]);
-    return ((1 - u) * m.row(static_cast<Eigen::Index>(i)) + u * m.row(static_cast<Eigen::Index>(i + 1))).transpose();
+    return (1 - u) * v[i] + u * v[i + 1];
   }
   const Animation& a_;
 };
@@ -225,6 +219,10 @@ int startFromMotion(SpacetimeProblem& problem, const Animation& animation) {
   }
   for (const auto& [at, forces] : balanced) problem.setSampleForces(at.first, at.second, forces);
   return matched;
+}
+
+SolverMethod methodForMotionStart(SolverMethod method) {
+  return method == SolverMethod::AugmentedLagrangian ? SolverMethod::Sqp : method;
 }
 
 }  // namespace spacetime

@@ -470,10 +470,10 @@ void MainWindow::solve() {
     warm = doc_.motion()->state;
     warmScene = doc_.motion()->scene;
   }
-  // A motion fitted to a motion file has no multipliers: the augmented Lagrangian would start its
-  // whole path over from it, where sqp's programs compute them (docs/design.md, Solver item 4).
+  // A motion fitted to a motion file has no multipliers: its method as methodForMotionStart says.
   std::optional<SolverMethod> method;
-  if (doc_.motion() && doc_.motion()->fromMotionFile && doc_.scene().solver.method == "al") method = SolverMethod::Sqp;
+  if (doc_.motion() && doc_.motion()->fromMotionFile)
+    method = methodForMotionStart(solverOptionsFor(doc_.scene().solver).method);
   job_.start(doc_.scene(), warm, warmScene, method);
   solveAction_->setEnabled(false);
   stopAction_->setEnabled(true);

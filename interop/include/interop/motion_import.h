@@ -14,6 +14,9 @@ namespace spacetime {
 struct MotionLoadResult {
   std::optional<Animation> animation;
   std::string error;  // empty on success: names the file, the field and what is wrong
+  // The text has a motion file's shape (looksLikeMotionJson), parsed or not: a caller that may
+  // be given either kind tells a malformed motion file from a scene with one parse.
+  bool motionFile = false;
 };
 
 // Whether `text` is a motion file rather than a scene: a JSON object with `formatVersion` and

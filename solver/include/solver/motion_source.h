@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "solver/augmented_lagrangian.h"
+
 namespace spacetime {
 
 class SpacetimeProblem;
@@ -52,5 +54,13 @@ std::unique_ptr<MotionSource> motionSourceOf(const Animation& animation);
 // the file's forces are linear between frames, which a push-off outruns (0.10 x weight off at
 // the jump's samples from 120 Hz frames). Returns the number of characters matched.
 int startFromMotion(SpacetimeProblem& problem, const Animation& animation);
+
+// The method a solve started by startFromMotion runs when `method` was the scene's: a motion
+// file has no multipliers, and the augmented Lagrangian's warm start needs them (its Newton
+// polish takes its active set from lambda + rho g: from the jump's own motion it re-ran its whole
+// path, 375 LM iterations to another optimum), where sqp's first program computes them and its
+// steps end at the motion's optimum in 1-3 (docs/design.md, Solver item 4). So `al` becomes
+// `sqp`; the other methods stay.
+SolverMethod methodForMotionStart(SolverMethod method);
 
 }  // namespace spacetime
