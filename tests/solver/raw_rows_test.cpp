@@ -1,0 +1,116 @@
+// The raw rows' evaluator (solver/src/raw_rows.h), which the Newton polish, the SQP, the
+// restoration, Witkin-Kass and the interior point share, against Ceres's own
+// Problem::Evaluate of the same residual blocks in the same columns: the evaluator calls each
+// cost function itself and scatters its block Jacobians into a row pattern fixed once, so its
+// rows and its Jacobian must be Ceres's to the last bit - on the held stances' partly constant
+// blocks (SubsetManifold), on a free lift-off's moving rows, with one and with two threads, and
+// with the Jacobians of the inequalities a caller does not need left out.
+#include <gtest/gtest.h>
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+
+#include "../../solver/src/raw_rows.h"
+#include "../shipped_scene.h"
+#include "perturbed.h"
+#include "solver/spacetime_problem.h"
+
+namespace spacetime {
+namespace {
+
+// Ceres's rows and dense Jacobian of every residual block in the tangent columns of `vars`.
+// Without `jacobian`, the rows alone (the kernels' double path, which may differ from their Jets'
+// values in the last bit).
+void ceresRows(SpacetimeProblem& problem, const raw::Variables& vars, Eigen::VectorXd* rows,
+               Eigen::MatrixXd* jacobian) {
+  ceres::Problem::EvaluateOptions options;
+  options.parameter_blocks = vars.blocks;
+  problem.ceresProblem().GetResidualBlocks(&options.residual_blocks);
+  AugmentedLagrangianState& al = problem.augmentedLagrangian();
+  al.raw = true;
+  double cost = 0;
+  std::vector<double> values;
+  ceres::CRSMatrix J;
+  ASSERT_TRUE(problem.ceresProblem().Evaluate(options, &cost, &values, nullptr, jacobian ? &J : nullptr));
+  al.raw = false;
+  *rows = Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+  if (!jacobian) return;
+  *jacobian = Eigen::MatrixXd::Zero(J.num_rows, J.num_cols);
+  for (int r = 0; r < J.num_rows; ++r)
+    for (int k = J.rows[r]; k < J.rows[r + 1]; ++k) (*jacobian)(r, J.cols[k]) = J.values[k];
+}
+
+void expectCeresRows(SpacetimeProblem& problem) {
+  testing::perturb(problem, 7, 0.05);
+  const raw::Variables vars(problem.ceresProblem());
+  Eigen::VectorXd expectedRows;
+  Eigen::MatrixXd expected;
+  ceresRows(problem, vars, &expectedRows, &expected);
+  Eigen::VectorXd expectedValuesOnly;
+  ceresRows(problem, vars, &expectedValuesOnly, nullptr);
+  for (int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    raw::RawEvaluator evaluator(problem, vars, threads);
+    raw::RawRows rows;
+    ASSERT_TRUE(evaluator.evaluate(&rows, true));
+    ASSERT_EQ(rows.values.size(), expectedRows.size());
+    EXPECT_EQ((rows.values - expectedRows).cwiseAbs().maxCoeff(), 0.0);
+    const Eigen::MatrixXd J(rows.jacobian);
+    ASSERT_EQ(J.rows(), expected.rows());
+    ASSERT_EQ(J.cols(), expected.cols());
+    EXPECT_EQ((J - expected).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_GT(expected.cwiseAbs().maxCoeff(), 0.0);
+    // A second evaluation into the same rows reuses their pattern and overwrites every value.
+    rows.jacobian.coeffs() *= 3;
+    ASSERT_TRUE(evaluator.evaluate(&rows, true));
+    EXPECT_EQ((Eigen::MatrixXd(rows.jacobian) - expected).cwiseAbs().maxCoeff(), 0.0);
+    // Without the Jacobian: the same rows.
+    raw::RawRows valuesOnly;
+    ASSERT_TRUE(evaluator.evaluate(&valuesOnly, false));
+    EXPECT_EQ((valuesOnly.values - expectedValuesOnly).cwiseAbs().maxCoeff(), 0.0);
+  }
+  // Inequalities no caller needs and none near its bound: the blocks of such rows alone are
+  // evaluated without their Jets and get zero Jacobian rows; every other row is Ceres's.
+  raw::RawEvaluator evaluator(problem, vars, 2);
+  std::vector<char> needed(evaluator.rows(), 1);
+  for (int r = 0; r < evaluator.rows(); ++r)
+    if (evaluator.kind(r) == RowKind::Inequality) needed[r] = 0;
+  evaluator.limitJacobians(needed, 1e9);
+  raw::RawRows limited;
+  ASSERT_TRUE(evaluator.evaluate(&limited, true));
+  EXPECT_LT((limited.values - expectedRows).cwiseAbs().maxCoeff(), 1e-12);  // some by the double path
+  const Eigen::MatrixXd J(limited.jacobian);
+  int dropped = 0;
+  for (int r = 0; r < evaluator.rows(); ++r) {
+    if ((J.row(r) - expected.row(r)).cwiseAbs().maxCoeff() == 0) continue;
+    EXPECT_EQ(evaluator.kind(r), RowKind::Inequality) << "row " << r;
+    EXPECT_EQ(J.row(r).cwiseAbs().maxCoeff(), 0.0) << "row " << r;
+    ++dropped;
+  }
+  EXPECT_GT(dropped, evaluator.rows() / 10);
+}
+
+TEST(RawRows, TheEvaluatorGivesCeressRowsAndJacobianBitForBit) {
+  for (const char* name : {"luxo_jump.json", "luxo_3d.json", "biped_jump.json"}) {
+    SCOPED_TRACE(name);
+    std::string error;
+    auto problem = SpacetimeProblem::build(testing::shippedScene(name), &error);
+    ASSERT_TRUE(problem) << error;
+    expectCeresRows(*problem);
+  }
+}
+
+TEST(RawRows, AFreeLiftOffsMovingRowsAreCeressToo) {
+  Scene scene = testing::shippedScene("luxo_jump.json");
+  for (TermSpec& t : scene.terms)
+    if (t.id == "takeoff") t.freeEnd = true;
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(problem) << error;
+  ASSERT_FALSE(problem->freeEnds().empty());
+  expectCeresRows(*problem);
+}
+
+}  // namespace
+}  // namespace spacetime
