@@ -2,6 +2,9 @@
 #include "solver/spacetime_problem.h"
 
 #include <algorithm>
+#include <array>
+#include <cassert>
+#include <initializer_list>
 #include <cmath>
 #include <sstream>
 
@@ -92,21 +95,26 @@ std::vector<LowestPointFeature> inPlane(const std::vector<LowestPointFeature>& f
 }
 
 // The order-th derivative in u of base(u) (2u-1)^j, base given by its ascending coefficients.
-double bubbleShape(std::vector<double> c, int j, double u, int order) {
-  for (int i = 0; i < j; ++i) {                 // times (2u - 1)
-    std::vector<double> next(c.size() + 1, 0.0);
-    for (size_t k = 0; k < c.size(); ++k) {
-      next[k] -= c[k];
-      next[k + 1] += 2 * c[k];
-    }
-    c = std::move(next);
+// On the stack: every spline evaluation of a root with bubbles comes here (the validity report's
+// dense grid, the outputs' frames), and the heap vectors it used were 12 % of a warm solve's run.
+double bubbleShape(std::initializer_list<double> base, int j, double u, int order) {
+  constexpr int kLongest = 7;  // the leg bubbles' base
+  std::array<double, kLongest + GroupBasis::kCapacity + 1> c{};
+  assert(static_cast<int>(base.size()) <= kLongest && j <= GroupBasis::kCapacity);
+  std::copy(base.begin(), base.end(), c.begin());
+  size_t size = base.size();
+  for (int i = 0; i < j; ++i) {  // times (2u - 1), in place from the top: c_k <- 2 c_(k-1) - c_k
+    c[size] = 2 * c[size - 1];
+    for (size_t k = size - 1; k > 0; --k) c[k] = 2 * c[k - 1] - c[k];
+    c[0] = -c[0];
+    ++size;
   }
   for (int d = 0; d < order; ++d) {
-    for (size_t k = 1; k < c.size(); ++k) c[k - 1] = k * c[k];
-    c.back() = 0;
+    for (size_t k = 1; k < size; ++k) c[k - 1] = k * c[k];
+    c[size - 1] = 0;
   }
   double v = 0;
-  for (size_t k = c.size(); k-- > 0;) v = v * u + c[k];
+  for (size_t k = size; k-- > 0;) v = v * u + c[k];
   return v;
 }
 
