@@ -28,6 +28,7 @@
 #include "core/scene_io.h"
 #include "interop/motion_import.h"
 #include "solver/motion_source.h"
+#include "solver/multiplier_estimate.h"
 #include "solver/augmented_lagrangian.h"
 #include "interop/outputs.h"
 #include "solver/interior_point.h"
@@ -248,15 +249,25 @@ int run(int argc, char** argv) {
     const int matched = startFromMotion(*problem, *startMotion);
     options.warmStart = matched > 0;
     // The scene's method as methodForMotionStart chooses it (a motion file has no multipliers);
-    // an explicit --method is kept.
+    // an explicit --method is kept, and the methods that read multipliers get estimated ones.
     const bool toSqp = matched > 0 && method.empty() && methodForMotionStart(options.method) != options.method;
     if (toSqp) options.method = methodForMotionStart(options.method);
-    if (!quiet)
-      std::fprintf(stderr, "starting from %s: %s%s\n", initPath.c_str(),
-                   matched > 0 ? "its sampled motion and contact forces, fitted to this transcription (a motion file "
-                                 "holds no solver state: the multipliers start at zero)"
-                               : "no character of this scene in it (matched by id and dof count); the default guess",
-                   toSqp ? "; solved by sqp, whose programs compute the multipliers (--method al to keep al)" : "");
+    std::string how = "no character of this scene in it (matched by id and dof count); the default guess";
+    if (matched > 0) {
+      how = "its sampled motion and contact forces, fitted to this transcription; ";
+      if (motionStartReadsMultipliers(options.method)) {
+        const MultiplierEstimate e = estimateMultipliers(
+            *problem, std::min(options.maxPenalty, options.nearFeasiblePenalty), std::max(1, options.threads));
+        char text[160];
+        std::snprintf(text, sizeof text, "multipliers estimated there (stationarity %.2g, %d inequalities at their bound)",
+                      e.stationarity, e.active);
+        how += e.ok ? text : "no multiplier estimate (the rows are not finite)";
+      } else {
+        how += toSqp ? "solved by sqp, whose programs compute the multipliers (--method al to keep al)"
+                     : "the method computes the multipliers";
+      }
+    }
+    if (!quiet) std::fprintf(stderr, "starting from %s: %s\n", initPath.c_str(), how.c_str());
   }
   ProgressCallback progress = nullptr;
   if (!quiet)

@@ -103,7 +103,8 @@ editor_solves() {
 
 # Solves started from a motion.json alone (spacetime-cli --init, no scene.json beside it): each
 # scene solved cold, its motion.json (at RATE frames per second) moved away, the scene solved
-# again from it - by sqp, as the CLI chooses for a scene whose method is al, and by al when asked.
+# again from it - by sqp, as the CLI chooses for a scene whose method is al, and by al and
+# witkin-kass when asked (from the multipliers the CLI estimates for them).
 motion_starts() {
   echo
   echo "## Solves from a motion file alone (spacetime-cli solve SCENE --init motion.json, 2 threads, single runs)"
@@ -112,7 +113,8 @@ motion_starts() {
   echo "|---|---|---|---|---|---|---|---|"
   local name rate method
   for run in luxo_jump:1000:auto luxo_jump:120:auto luxo_jump:60:auto luxo_jump:24:auto luxo_jump:1000:al \
-             luxo_hurdle:1000:auto luxo_3d:1000:auto biped_jump:1000:auto; do
+             luxo_jump:120:al luxo_jump:1000:witkin-kass luxo_hurdle:1000:auto luxo_hurdle:1000:al \
+             luxo_3d:1000:auto luxo_3d:1000:al biped_jump:1000:auto biped_jump:1000:al; do
     IFS=: read -r name rate method <<< "$run"
     [ -d "$tmp/cold_$name" ] || build/app/spacetime-cli solve "resources/scenes/$name.json" --out "$tmp/cold_$name" --quiet --max-seconds 300 2> /dev/null || true
     rm -rf "$tmp/rated" "$tmp/lone" "$tmp/from_motion"

@@ -225,4 +225,8 @@ SolverMethod methodForMotionStart(SolverMethod method) {
   return method == SolverMethod::AugmentedLagrangian ? SolverMethod::Sqp : method;
 }
 
+bool motionStartReadsMultipliers(SolverMethod method) {
+  return method == SolverMethod::AugmentedLagrangian || method == SolverMethod::WitkinKass;
+}
+
 }  // namespace spacetime

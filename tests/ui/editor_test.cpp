@@ -314,7 +314,8 @@ class EditorTest : public QObject {
   // display samples) starts another window's scene near the same motion - fitted, within 1e-4 of
   // every displayed q - and its solve, sqp since the file has no multipliers, ends at the same
   // objective in a few steps. A malformed file and a motion of another character are refused
-  // with the reason, the motion on show unchanged.
+  // with the reason, the motion on show unchanged. A scene solved by witkin-kass keeps its method,
+  // warm from the multipliers the import estimates.
   void aMotionFileStartsTheSolveAtItsOptimum() {
     QTemporaryDir dir;
     MainWindow w;
@@ -345,6 +346,33 @@ class EditorTest : public QObject {
              solved->reason.c_str());
     QVERIFY2(std::abs(solved->objective - objective) < 1e-6 * objective,
              qPrintable(QString("%1 against %2").arg(solved->objective, 0, 'g', 12).arg(objective, 0, 'g', 12)));
+
+    // A scene solved by witkin-kass keeps its method: the import estimates the multipliers its
+    // warm start reads, and Newton steps alone end at the same optimum.
+    {
+      QFile shipped(":/scenes/luxo_jump.json");
+      QVERIFY(shipped.open(QIODevice::ReadOnly));
+      QJsonObject json = QJsonDocument::fromJson(shipped.readAll()).object();
+      QJsonObject solver = json["solver"].toObject();
+      solver["method"] = "witkin-kass";
+      json["solver"] = solver;
+      QFile edited(dir.filePath("witkin_kass.json"));
+      QVERIFY(edited.open(QIODevice::WriteOnly));
+      edited.write(QJsonDocument(json).toJson());
+      edited.close();
+      MainWindow k;
+      QVERIFY(openScene(k, edited.fileName()));
+      k.setAutoSolve(false);
+      QVERIFY2(k.importMotionJson(dir.filePath("motion.json"), &error), qPrintable(error));
+      k.solve();
+      QVERIFY(k.solverJob()->waitForFinished(scaled(120000)));
+      const std::shared_ptr<const SolvedMotion> projected = k.document()->motion();
+      QVERIFY(projected && projected->converged);
+      QVERIFY2(QString::fromStdString(projected->reason).contains(QRegularExpression("after [1-9] Newton steps")),
+               projected->reason.c_str());
+      QVERIFY2(std::abs(projected->objective - objective) < 1e-6 * objective,
+               qPrintable(QString("%1 against %2").arg(projected->objective, 0, 'g', 12).arg(objective, 0, 'g', 12)));
+    }
 
     QFile bad(dir.filePath("bad.json"));
     QVERIFY(bad.open(QIODevice::WriteOnly));

@@ -34,6 +34,7 @@
 #include "interop/motion_import.h"
 #include "interop/outputs.h"
 #include "solver/motion_source.h"
+#include "solver/multiplier_estimate.h"
 
 namespace spacetime::ui {
 
@@ -524,6 +525,11 @@ bool MainWindow::importMotionJson(const QString& path, QString* error) {
                  .arg(QDir::toNativeSeparators(path), theirs.join(", "));
     return false;
   }
+  // The multipliers of the motion, estimated for a method that reads them (the solve's own state
+  // then carries them into its warm start).
+  const SolverOptions options = solverOptionsFor(doc_.scene().solver);
+  if (motionStartReadsMultipliers(methodForMotionStart(options.method)))
+    estimateMultipliers(*problem, std::min(options.maxPenalty, options.nearFeasiblePenalty), 1);
   job_.cancel();
   auto fitted = sampleMotion(*problem);
   const ProblemMeasures m = measure(*problem);

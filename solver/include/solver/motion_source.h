@@ -56,11 +56,20 @@ std::unique_ptr<MotionSource> motionSourceOf(const Animation& animation);
 int startFromMotion(SpacetimeProblem& problem, const Animation& animation);
 
 // The method a solve started by startFromMotion runs when `method` was the scene's: a motion
-// file has no multipliers, and the augmented Lagrangian's warm start needs them (its Newton
-// polish takes its active set from lambda + rho g: from the jump's own motion it re-ran its whole
-// path, 375 LM iterations to another optimum), where sqp's first program computes them and its
-// steps end at the motion's optimum in 1-3 (docs/design.md, Solver item 4). So `al` becomes
-// `sqp`; the other methods stay.
+// file has no multipliers, and even from estimated ones (motionStartReadsMultipliers below) the
+// augmented Lagrangian's Newton polish does not always finish (from their own motion files the 3D
+// lamp took 240 LM iterations and 9 Newton steps, 5.5 s, the biped 587 and 8, 22.7 s), where
+// sqp's first program computes them and its steps end at the motion's optimum in 1-2 (1.4 and
+// 0.9 s; docs/design.md, Solver item 4). So `al` becomes `sqp`; the other methods stay.
 SolverMethod methodForMotionStart(SolverMethod method);
+
+// Whether `method`, started from a motion file, reads the multipliers from the problem's state,
+// so that they are estimated first (estimateMultipliers, solver/multiplier_estimate.h): the
+// augmented Lagrangian (its warm start is the Newton polish, whose active set is lambda + rho g)
+// and witkin-kass (whose warm start is the augmented Lagrangian's). From the jump's own motion
+// file both then end at its optimum in 6 Newton steps instead of re-running the whole path (375
+// LM iterations) to another. `sqp` computes them in its first program: started warm from the
+// estimate, the 3D lamp took 7 steps instead of 2. The interior point computes its own.
+bool motionStartReadsMultipliers(SolverMethod method);
 
 }  // namespace spacetime

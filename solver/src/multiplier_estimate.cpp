@@ -1,0 +1,88 @@
+// First-order multiplier estimate (see multiplier_estimate.h): the regularised least-squares
+// solution of J_A^T y = -grad f by the normal equations' sparse LDL^T, with the inequalities whose
+// multiplier comes out negative leaving A one round at a time.
+#include "solver/multiplier_estimate.h"
+
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <vector>
+
+#include "program_steps.h"
+#include "raw_rows.h"
+
+namespace spacetime {
+
+using raw::RawEvaluator;
+using raw::RawRows;
+using raw::SpMat;
+using raw::SpRow;
+using raw::Vec;
+
+namespace {
+
+constexpr int kMaxRounds = 20;
+// On the scaled normal equations' unit diagonal.
+constexpr double kRegularisation = 1e-12;
+
+}  // namespace
+
+MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, int threads) {
+  MultiplierEstimate out;
+  const raw::Variables vars(problem.ceresProblem());
+  RawEvaluator evaluator(problem, vars, threads);
+  RawRows rows;
+  if (!evaluator.evaluate(&rows, true)) return out;
+  const raw::RowKinds kinds(evaluator);
+  const Vec grad = raw::selectRows(rows.jacobian, kinds.objective).transpose() *
+                   raw::selectValues(rows.values, kinds.objective);
+  std::vector<int> held = kinds.equality;
+  for (int r : kinds.inequality)
+    if (rows.values[r] > -raw::kAtBound) held.push_back(r);
+  if (held.empty()) return out;
+  std::sort(held.begin(), held.end());
+
+  Vec y = Vec::Zero(evaluator.rows());
+  for (int round = 0; round < kMaxRounds; ++round) {
+    // Tikhonov-regularised least squares, min |J_A^T y + grad f|^2 + delta |y|^2 over rows scaled
+    // to unit norm (metres, radians and fractions of the weight differ by orders of magnitude):
+    // at a bound the rows are dependent, so the multipliers are not unique, and the regularised
+    // ones stay moderate. An exact sparse QR's basic solution reached a stationarity of 5e-12 at
+    // the jump's optimum but put multipliers in the thousands on dependent rows, and from their
+    // motion files the 3D lamp and the biped then ran away under the augmented Lagrangian
+    // (objectives 5e4 and 1e6) where with these they converge.
+    SpRow JA = raw::selectRows(rows.jacobian, held);
+    Vec scale(JA.rows());
+    for (Eigen::Index i = 0; i < JA.rows(); ++i) {
+      const double norm = JA.row(i).norm();
+      scale[i] = norm > 0 ? 1 / norm : 1;
+    }
+    JA = scale.asDiagonal() * JA;
+    SpMat N = SpMat(JA * SpRow(JA.transpose()));
+    for (int i = 0; i < N.outerSize(); ++i) N.coeffRef(i, i) += kRegularisation;
+    Eigen::SimplicialLDLT<SpMat> ldlt(N);
+    if (ldlt.info() != Eigen::Success) return out;
+    const Vec yA = scale.cwiseProduct(ldlt.solve(-(JA * grad)));
+    y.setZero();
+    std::vector<int> keep;
+    for (size_t i = 0; i < held.size(); ++i) {
+      const int r = held[i];
+      y[r] = yA[static_cast<Eigen::Index>(i)];
+      if (evaluator.kind(r) == RowKind::Inequality && y[r] < 0) {
+        ++out.dropped;
+        y[r] = 0;
+      } else {
+        keep.push_back(r);
+      }
+    }
+    if (keep.size() == held.size()) break;
+    held = keep;
+  }
+  for (int r : kinds.inequality) out.active += y[r] > 0;
+  out.stationarity = (grad + SpMat(rows.jacobian.transpose()) * y).lpNorm<Eigen::Infinity>() /
+                     std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+  raw::handOverMultipliers(evaluator, y, rows.values, rho, &problem.augmentedLagrangian());
+  out.ok = true;
+  return out;
+}
+
+}  // namespace spacetime
