@@ -6,6 +6,7 @@
 
 #include "core/nnls.h"
 #include "dynamics/algorithms.h"
+#include "dynamics/inverse_kinematics.h"
 
 namespace spacetime {
 namespace {
@@ -72,7 +73,6 @@ GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Si
                         qdd = problem.jointStateOnSide(c, t, 2, side);
   Data<double> data(model);
   const Eigen::VectorXd tau = rnea(model, data, q.data(), qd.data(), qdd.data(), {});
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
   const double sqrtEps = std::sqrt(kTieBreak);
 
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(u + 3 * pointCount, columns.size());
@@ -86,15 +86,20 @@ GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Si
         row += 3;
       }
   }
+  // An edge force e at a point enters the unactuated balance as -J^T e (what the RNEA of that
+  // force alone, without motion or gravity, gives): J, the point's Jacobian in the unactuated
+  // dofs, once per point (Featherstone RBDA eq. 2.69 for the points' velocities), instead of an
+  // RNEA per edge - two per point in the plane, eight in 3D.
+  forwardKinematics(model, data, q.data());
   int pointRow = 0;
+  Eigen::Matrix3Xd J;
   for (size_t col = 0; col < columns.size(); ++col) {
     const Column& cl = columns[col];
     const ContactVariables& ct = problem.contacts()[cl.contact];
-    if (col > 0 && (columns[col - 1].contact != cl.contact || columns[col - 1].point != cl.point)) ++pointRow;
-    // RNEA of the edge force alone (no motion, no gravity) is -J^T edge.
-    const Eigen::VectorXd g = rnea(model, data, q.data(), zero.data(), zero.data(),
-                                   {pointForce(ct, cl.point, cl.edge)}, false);
-    for (int k = 0; k < u; ++k) A(k, col) = g[unactuated[k]] / cv.weight;
+    const bool newPoint = col == 0 || columns[col - 1].contact != cl.contact || columns[col - 1].point != cl.point;
+    if (col > 0 && newPoint) ++pointRow;
+    if (newPoint) J = pointJacobian(model, data, ct.points.body, ct.points.points[cl.point], unactuated);
+    for (int k = 0; k < u; ++k) A(k, col) = -J.col(k).dot(cl.edge) / cv.weight;
     A.block<3, 1>(u + 3 * pointRow, col) = sqrtEps * cl.edge / cv.weight;
   }
   const NnlsResult r = nnls(A, b);

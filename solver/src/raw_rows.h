@@ -3,7 +3,8 @@
 // (interior_point.cpp), the restoration (restoration.cpp), the SQP (sqp.cpp) and the projected
 // Newton method (witkin_kass.cpp). Variables lists the parameter blocks that move and the tangent
 // column of each coordinate; RawEvaluator evaluates every row with its Jacobian in those
-// columns through Ceres, and the weighted curvature sum_r w_r grad^2 row_r of the kernels.
+// columns (each term's Ceres cost function, into a pattern built once), and the weighted
+// curvature sum_r w_r grad^2 row_r of the kernels.
 #pragma once
 
 #include <ceres/ceres.h>
