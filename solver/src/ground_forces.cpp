@@ -88,7 +88,7 @@ GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Si
   }
   // An edge force e at a point enters the unactuated balance as -J^T e (what the RNEA of that
   // force alone, without motion or gravity, gives): J, the point's Jacobian in the unactuated
-  // dofs, once per point (Featherstone RBDA eq. 2.69 for the points' velocities), instead of an
+  // dofs, once per point (virtual work: a force f at the point does J^T f), instead of an
   // RNEA per edge - two per point in the plane, eight in 3D.
   forwardKinematics(model, data, q.data());
   int pointRow = 0;
