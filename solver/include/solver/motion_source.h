@@ -58,9 +58,10 @@ int startFromMotion(SpacetimeProblem& problem, const Animation& animation);
 // The method a solve started by startFromMotion runs when `method` was the scene's: a motion
 // file has no multipliers, and even from estimated ones (motionStartReadsMultipliers below) the
 // augmented Lagrangian's Newton polish does not always finish (from their own motion files the 3D
-// lamp took 240 LM iterations and 9 Newton steps, 5.5 s, the biped 587 and 8, 22.7 s), where
-// sqp's first program computes them and its steps end at the motion's optimum in 1-2 (1.4 and
-// 0.9 s; docs/design.md, Solver item 4). So `al` becomes `sqp`; the other methods stay.
+// lamp took 290 LM iterations and 45 Newton steps, 6.4 s, the biped 349 and 42, 18.7 s), where
+// sqp's first program computes them and its steps end at the motion's optimum in 1-2 (1.5 and
+// 0.7 s; docs/performance.md, "Starting from a motion file"). So `al` becomes `sqp`; the other
+// methods stay.
 SolverMethod methodForMotionStart(SolverMethod method);
 
 // Whether `method`, started from a motion file, reads the multipliers from the problem's state,

@@ -1,10 +1,11 @@
 // First-order multiplier estimate: the multipliers a motion that did not come with its own
 // (a motion.json read back, solver/motion_source.h) would have if it were a KKT point - the least-
 // squares solution y of grad f + J_A^T y = 0 over the equalities and the inequalities at their
-// bound, those with a negative multiplier dropped until none is left (Nocedal & Wright eq. 18.21;
-// the active-set rule of a non-negative least-squares solve). Handed to the augmented-Lagrangian
-// state with a penalty, they let every method start warm: the augmented Lagrangian's Newton
-// polish takes its active set from lambda + rho g, `sqp` its first program's.
+// bound (the least-squares multipliers IPOPT starts from, Waechter & Biegler 2006), those with a
+// negative multiplier dropped until none is left (the active-set rule of Lawson and Hanson's
+// non-negative least squares). Handed to the augmented-Lagrangian state with a penalty, they let
+// the augmented Lagrangian and witkin-kass start warm: their Newton polish takes its active set
+// from lambda + rho g.
 #pragma once
 
 namespace spacetime {
