@@ -28,7 +28,6 @@
 #include "core/scene_io.h"
 #include "interop/motion_import.h"
 #include "solver/motion_source.h"
-#include "solver/multiplier_estimate.h"
 #include "solver/augmented_lagrangian.h"
 #include "interop/outputs.h"
 #include "solver/interior_point.h"
@@ -255,13 +254,11 @@ int run(int argc, char** argv) {
     std::string how = "no character of this scene in it (matched by id and dof count); the default guess";
     if (matched > 0) {
       how = "its sampled motion and contact forces, fitted to this transcription; ";
-      if (motionStartReadsMultipliers(options.method)) {
-        const MultiplierEstimate e = estimateMultipliers(
-            *problem, std::min(options.maxPenalty, options.nearFeasiblePenalty), std::max(1, options.threads));
+      if (const std::optional<MultiplierEstimate> e = multipliersForMotionStart(*problem, options)) {
         char text[160];
         std::snprintf(text, sizeof text, "multipliers estimated there (stationarity %.2g, %d inequalities at their bound)",
-                      e.stationarity, e.active);
-        how += e.ok ? text : "no multiplier estimate (the rows are not finite)";
+                      e->stationarity, e->active);
+        how += e->ok ? text : "no multiplier estimate (the rows are not finite)";
       } else {
         how += toSqp ? "solved by sqp, whose programs compute the multipliers (--method al to keep al)"
                      : "the method computes the multipliers";

@@ -2,6 +2,7 @@
 #include "solver/motion_source.h"
 
 #include <algorithm>
+#include <map>
 
 #include "solver/animation.h"
 #include "solver/ground_forces.h"
@@ -208,14 +209,19 @@ int startFromMotion(SpacetimeProblem& problem, const Animation& animation) {
   // All samples' forces first, from the fitted motion with the file's forces as the tie-break,
   // then written: each sample reads only its own instant. Characters the motion does not have
   // keep the default guess.
+  // One recovery per character and instant serves every contact with a sample there (a biped's
+  // two feet share their samples' times).
+  std::map<std::pair<int, double>, GroundForces> recovered;
   std::vector<std::pair<std::pair<int, int>, std::vector<Eigen::Vector3d>>> balanced;
   for (size_t j = 0; j < problem.contacts().size(); ++j) {
     const ContactVariables& ct = problem.contacts()[j];
     const int c = ct.character;
     if (source->character(problem.scene().characters[c].id, problem.characters()[c].dofs) < 0) continue;
-    for (size_t i = 0; i < ct.times.size(); ++i)
-      balanced.push_back({{static_cast<int>(j), static_cast<int>(i)},
-                          groundForcesAt(problem, ct.character, ct.times[i])[j]});
+    for (size_t i = 0; i < ct.times.size(); ++i) {
+      auto at = recovered.find({c, ct.times[i]});
+      if (at == recovered.end()) at = recovered.emplace(std::make_pair(c, ct.times[i]), groundForcesAt(problem, c, ct.times[i])).first;
+      balanced.push_back({{static_cast<int>(j), static_cast<int>(i)}, at->second[j]});
+    }
   }
   for (const auto& [at, forces] : balanced) problem.setSampleForces(at.first, at.second, forces);
   return matched;
@@ -227,6 +233,12 @@ SolverMethod methodForMotionStart(SolverMethod method) {
 
 bool motionStartReadsMultipliers(SolverMethod method) {
   return method == SolverMethod::AugmentedLagrangian || method == SolverMethod::WitkinKass;
+}
+
+std::optional<MultiplierEstimate> multipliersForMotionStart(SpacetimeProblem& problem, const SolverOptions& options) {
+  if (!motionStartReadsMultipliers(options.method)) return std::nullopt;
+  return estimateMultipliers(problem, std::min(options.maxPenalty, options.nearFeasiblePenalty),
+                             std::max(1, options.threads));
 }
 
 }  // namespace spacetime

@@ -34,7 +34,6 @@
 #include "interop/motion_import.h"
 #include "interop/outputs.h"
 #include "solver/motion_source.h"
-#include "solver/multiplier_estimate.h"
 
 namespace spacetime::ui {
 
@@ -526,10 +525,11 @@ bool MainWindow::importMotionJson(const QString& path, QString* error) {
     return false;
   }
   // The multipliers of the motion, estimated for a method that reads them (the solve's own state
-  // then carries them into its warm start).
-  const SolverOptions options = solverOptionsFor(doc_.scene().solver);
-  if (motionStartReadsMultipliers(methodForMotionStart(options.method)))
-    estimateMultipliers(*problem, std::min(options.maxPenalty, options.nearFeasiblePenalty), 1);
+  // then carries them into its warm start); here on the interface's thread, on one core.
+  SolverOptions options = solverOptionsFor(doc_.scene().solver);
+  options.method = methodForMotionStart(options.method);
+  options.threads = 1;
+  multipliersForMotionStart(*problem, options);
   job_.cancel();
   auto fitted = sampleMotion(*problem);
   const ProblemMeasures m = measure(*problem);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "solver/augmented_lagrangian.h"
+#include "solver/multiplier_estimate.h"
 
 namespace spacetime {
 
@@ -72,5 +73,11 @@ SolverMethod methodForMotionStart(SolverMethod method);
 // LM iterations) to another. `sqp` computes them in its first program: started warm from the
 // estimate, the 3D lamp took 7 steps instead of 2. The interior point computes its own.
 bool motionStartReadsMultipliers(SolverMethod method);
+
+// The multipliers of a motion-file start for the method `options` solves it with: estimated
+// (estimateMultipliers) at the penalty a near-feasible augmented Lagrangian holds when that
+// method reads them (motionStartReadsMultipliers), nothing otherwise. The CLI and the editor's
+// import both start this way.
+std::optional<MultiplierEstimate> multipliersForMotionStart(SpacetimeProblem& problem, const SolverOptions& options);
 
 }  // namespace spacetime

@@ -57,8 +57,10 @@ class MainWindow : public QMainWindow {
 
   // Starts from a motion file (motion.json, as the export below or spacetime-cli write it): its
   // sampled motion and contact forces fitted to the scene's transcription go on show, and the
-  // next solve (at once with auto-solve) refines it by sqp. False with the reason: a malformed
-  // file (the field named), a scene that cannot be built, no character in common.
+  // next solve (at once with auto-solve) refines it by the method methodForMotionStart chooses
+  // (sqp for a scene whose method is al; witkin-kass warm from estimated multipliers). False
+  // with the reason: a malformed file (the field named), a scene that cannot be built, no
+  // character in common.
   bool importMotionJson(const QString& path, QString* error);
 
   // Exports (no dialogs).

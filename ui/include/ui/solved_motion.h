@@ -30,8 +30,9 @@ struct SolvedMotion {
   double maxViolation = 0;
   int iterations = 0;
   bool solved = false;     // false: the initial guess, or an iterate still being refined
-  // Fitted to a motion file's samples (File > Import): `state` holds no multipliers, which the
-  // augmented Lagrangian's warm start needs, so the next solve runs sqp (MainWindow::solve).
+  // Fitted to a motion file's samples (File > Import): `state` holds no multipliers of its own
+  // (estimated ones where the method reads them), so the next solve runs the method
+  // methodForMotionStart chooses - sqp for a scene whose method is al (MainWindow::solve).
   bool fromMotionFile = false;
   bool converged = false;  // the final solve met its tolerance
   std::string reason;      // why the solve stopped (final motions)
