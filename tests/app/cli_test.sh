@@ -249,7 +249,8 @@ grep -q "starting from $tmp/limited/scene.json (for --init $tmp/limited): its so
 # A motion.json moved away from its solve starts from its sampled motion and contact forces,
 # fitted to the scene's transcription: the scene's al becomes sqp (a motion file has no
 # multipliers, sqp's programs compute them), which ends at the converged motion's optimum in a
-# few steps.
+# few steps (from the 1 kHz file none: the fit is exact to 1e-9 rad and the polish that ends the
+# steps finishes at once).
 mkdir -p "$tmp/moved_away" && cp "$tmp/cold/motion.json" "$tmp/moved_away/"
 "$cli" solve "$scenes/luxo_jump.json" --out "$tmp/lone" --init "$tmp/moved_away/motion.json" 2>"$tmp/lone.err" ||
   fail "the jump started from a lone motion.json exited $?: $(tail -3 "$tmp/lone.err")"
@@ -258,7 +259,7 @@ grep -q "starting from $tmp/moved_away/motion.json: its sampled motion and conta
 python3 - "$tmp/cold/summary.json" "$tmp/lone/summary.json" <<'PY' || fail "the solve from a lone motion.json is wrong"
 import json, sys
 cold, lone = (json.load(open(p)) for p in sys.argv[1:])
-assert lone["method"] == "sqp" and 1 <= lone["sqp_steps"] <= 3 and lone["iterations"] == 0, (lone["method"], lone["sqp_steps"], lone["iterations"])
+assert lone["method"] == "sqp" and lone["sqp_steps"] <= 3 and lone["iterations"] == 0, (lone["method"], lone["sqp_steps"], lone["iterations"])
 assert abs(lone["objective"] - cold["objective"]) < 1e-6 * cold["objective"], (lone["objective"], cold["objective"])
 assert lone["validity"]["valid"], lone["validity"]
 PY
