@@ -2,35 +2,55 @@
 #include "core/nnls.h"
 
 #include <Eigen/QR>
-#include <vector>
+#include <algorithm>
 
 namespace spacetime {
+namespace {
 
-NnlsResult nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, int maxIterations) {
+// The ground's problems (a few unactuated dofs and three tie-break rows per contact point, by
+// two or eight cone edges per point) fit these bounds, and their matrices then live on the
+// stack: the validity report solves one per instant of its dense grid and of the forward
+// simulation, and the heap allocations were most of a small solve's time.
+constexpr int kMaxRows = 48, kMaxCols = 64;
+
+// The algorithm on storage of at most MaxRows x MaxCols (Eigen::Dynamic: unbounded, on the
+// heap); the arithmetic is the same either way.
+template <int MaxRows, int MaxCols>
+NnlsResult solve(const Eigen::MatrixXd& Ain, const Eigen::VectorXd& bin, int maxIterations) {
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, MaxRows, MaxCols>;
+  using PerRow = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MaxRows, 1>;
+  using PerColumn = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MaxCols, 1>;
+  using Flags = Eigen::Array<bool, Eigen::Dynamic, 1, 0, MaxCols, 1>;  // passive columns
+  const Matrix A = Ain;
+  const PerRow b = bin;
   const int n = static_cast<int>(A.cols());
   NnlsResult r;
-  r.x = Eigen::VectorXd::Zero(n);
+  PerColumn x = PerColumn::Zero(n), w(n), z(n);
+  PerRow residual(A.rows());
+  Flags passive = Flags::Constant(n, false);
   if (maxIterations <= 0) maxIterations = 3 * n + 10;
-  std::vector<bool> passive(n, false);
   // Tolerance on the gradient, relative to the problem's scale.
   const double tol = 1e-12 * std::max(1.0, A.norm() * b.norm());
 
   // Least squares restricted to the passive set; zero elsewhere.
+  Matrix Ap(A.rows(), n);
+  Eigen::ColPivHouseholderQR<Matrix> qr(A.rows(), n);
   auto solvePassive = [&] {
-    std::vector<int> idx;
+    z.setZero();
+    int k = 0;
     for (int i = 0; i < n; ++i)
-      if (passive[i]) idx.push_back(i);
-    if (idx.empty()) return Eigen::VectorXd::Zero(n).eval();
-    Eigen::MatrixXd Ap(A.rows(), idx.size());
-    for (size_t k = 0; k < idx.size(); ++k) Ap.col(k) = A.col(idx[k]);
-    const Eigen::VectorXd zp = Ap.colPivHouseholderQr().solve(b);
-    Eigen::VectorXd z = Eigen::VectorXd::Zero(n);
-    for (size_t k = 0; k < idx.size(); ++k) z[idx[k]] = zp[k];
-    return z.eval();
+      if (passive[i]) Ap.col(k++) = A.col(i);
+    if (k == 0) return;
+    qr.compute(Ap.leftCols(k));
+    const PerColumn zp = qr.solve(b);
+    k = 0;
+    for (int i = 0; i < n; ++i)
+      if (passive[i]) z[i] = zp[k++];
   };
 
   while (r.iterations < maxIterations) {
-    const Eigen::VectorXd w = A.transpose() * (b - A * r.x);
+    residual = b - A * x;
+    w.noalias() = A.transpose() * residual;
     int best = -1;
     for (int i = 0; i < n; ++i)
       if (!passive[i] && w[i] > tol && (best < 0 || w[i] > w[best])) best = i;
@@ -39,29 +59,37 @@ NnlsResult nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, int maxItera
     // Inner loop: keep the passive solution feasible (L&H steps 6-11).
     while (true) {
       ++r.iterations;
-      const Eigen::VectorXd z = solvePassive();
+      solvePassive();
       bool feasible = true;
       for (int i = 0; i < n; ++i)
         if (passive[i] && z[i] <= 0) feasible = false;
       if (feasible) {
-        r.x = z;
+        x = z;
         break;
       }
       double alpha = 1;
       for (int i = 0; i < n; ++i)
-        if (passive[i] && z[i] <= 0) alpha = std::min(alpha, r.x[i] / (r.x[i] - z[i]));
-      r.x += alpha * (z - r.x);
+        if (passive[i] && z[i] <= 0) alpha = std::min(alpha, x[i] / (x[i] - z[i]));
+      x += alpha * (z - x);
       for (int i = 0; i < n; ++i)
-        if (passive[i] && r.x[i] <= 1e-15) {
+        if (passive[i] && x[i] <= 1e-15) {
           passive[i] = false;
-          r.x[i] = 0;
+          x[i] = 0;
         }
       if (r.iterations >= maxIterations) break;
     }
   }
   r.converged = r.iterations < maxIterations;
-  r.residualNorm = (A * r.x - b).norm();
+  r.residualNorm = (A * x - b).norm();
+  r.x = x;
   return r;
+}
+
+}  // namespace
+
+NnlsResult nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, int maxIterations) {
+  if (A.rows() <= kMaxRows && A.cols() <= kMaxCols) return solve<kMaxRows, kMaxCols>(A, b, maxIterations);
+  return solve<Eigen::Dynamic, Eigen::Dynamic>(A, b, maxIterations);
 }
 
 }  // namespace spacetime
