@@ -39,14 +39,14 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
   const int n = model.dofCount();
   Data<double> data(model);
   // What acts at time t: the actuated joints' torques and the ground's point forces (none inside
-  // a flight; at its ends those of the contacts that end or begin there), from one NNLS.
+  // a flight), from one NNLS; at a breakpoint, on the given side of it.
   struct Loads {
     Eigen::VectorXd tau;
     std::vector<PointForce<double>> ground;
   };
-  auto loadsAt = [&](double t) {
-    const GroundForces forces = groundForcesAt(problem, c, t);
-    Loads l{generalizedForcesAt(problem, c, t, &forces), groundPointForcesAt(problem, c, t, &forces)};
+  auto loadsAt = [&](double t, Side side) {
+    const GroundForces forces = groundForcesAt(problem, c, t, side);
+    Loads l{generalizedForcesAt(problem, c, t, &forces, side), groundPointForcesAt(problem, c, t, &forces, side)};
     for (int d = 0; d < n; ++d)
       if (!model.bodies[model.dofBody[d]].actuated) l.tau[d] = 0;
     return l;
@@ -54,32 +54,48 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
   auto accel = [&](const Loads& l, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
     return aba(model, data, q.data(), qd.data(), l.tau.data(), l.ground);
   };
-  const int steps = std::max(10, static_cast<int>(std::ceil((t1 - t0) / 5e-4)));
-  const double h = (t1 - t0) / steps;
+  // The root's acceleration, and with it the torques, jumps at every breakpoint (its Hermite
+  // intervals join with C1 only; the lift-off and the touch-down are breakpoints too), so RK4
+  // integrates each interval between them on its own, reading its ends on its side. Steps across
+  // them, a step's start reading the previous interval's loads, carried each jump through a
+  // sixth of a step: an error proportional to the step (the jump's flight: 9.4e-5 m at 0.5 ms
+  // steps, 1.9e-4 at 1 ms, 3.7e-4 at 2 ms; now 1.31e-5, 1.30e-5, 1.29e-5: the motion's own).
+  // At 0.5 ms the figures agree with 0.25 ms steps' to 0.3 % (1 ms: 0.7 %).
+  const double maxStep = std::min(5e-4, (t1 - t0) / 10);
+  std::vector<double> ends{t0};
+  for (double b : problem.transcription().breakpoints)
+    if (b > t0 + kTimeTolerance && b < t1 - kTimeTolerance) ends.push_back(b);
+  ends.push_back(t1);
   Eigen::VectorXd q = problem.jointState(c, t0, 0), qd = problem.jointState(c, t0, 1);
   check.maxPositionError = 0;
-  // The loads depend on time alone: RK4's two midpoint stages share theirs, and a step's end is
-  // the next step's start, so each step evaluates two sets (the RNEA and the NNLS behind them
-  // cost more than the ABA).
-  Loads start = loadsAt(t0);
-  for (int s = 0; s < steps; ++s) {
-    if (cancel && cancel->load(std::memory_order_relaxed)) return;
-    const double t = t0 + s * h;
-    const Loads mid = loadsAt(t + 0.5 * h), end = loadsAt(t + h);
-    const Eigen::VectorXd k1v = qd, k1a = accel(start, q, qd);
-    const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(mid, q + 0.5 * h * k1v, k2v);
-    const Eigen::VectorXd k3v = qd + 0.5 * h * k2a, k3a = accel(mid, q + 0.5 * h * k2v, k3v);
-    const Eigen::VectorXd k4v = qd + h * k3a, k4a = accel(end, q + h * k3v, k4v);
-    start = end;
-    q += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-    qd += h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
-    const double error = (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff();
-    if (!std::isfinite(error) || !qd.allFinite() || error > FlightCheck::kDivergence) {
-      check.diverged = true;
-      check.divergenceTime = t + h;
-      return;
+  for (size_t piece = 0; piece + 1 < ends.size(); ++piece) {
+    const double a = ends[piece], b = ends[piece + 1];
+    const int steps = static_cast<int>(std::ceil((b - a) / maxStep));
+    const double h = (b - a) / steps;
+    // The loads depend on time alone: RK4's two midpoint stages share theirs, and a step's end
+    // is the next step's start, so each step evaluates two sets (the RNEA and the NNLS behind
+    // them cost more than the ABA).
+    Loads start = loadsAt(a, Side::After);
+    for (int s = 0; s < steps; ++s) {
+      if (cancel && cancel->load(std::memory_order_relaxed)) return;
+      const double t = a + s * h;
+      const Loads mid = loadsAt(t + 0.5 * h, Side::Contacts);
+      const Loads end = loadsAt(t + h, s + 1 == steps ? Side::Before : Side::Contacts);
+      const Eigen::VectorXd k1v = qd, k1a = accel(start, q, qd);
+      const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(mid, q + 0.5 * h * k1v, k2v);
+      const Eigen::VectorXd k3v = qd + 0.5 * h * k2a, k3a = accel(mid, q + 0.5 * h * k2v, k3v);
+      const Eigen::VectorXd k4v = qd + h * k3a, k4a = accel(end, q + h * k3v, k4v);
+      start = end;
+      q += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+      qd += h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
+      const double error = (q - problem.jointState(c, t + h, 0)).cwiseAbs().maxCoeff();
+      if (!std::isfinite(error) || !qd.allFinite() || error > FlightCheck::kDivergence) {
+        check.diverged = true;
+        check.divergenceTime = t + h;
+        return;
+      }
+      check.maxPositionError = std::max(check.maxPositionError, error);
     }
-    check.maxPositionError = std::max(check.maxPositionError, error);
   }
 }
 
