@@ -15,23 +15,12 @@
 #include "interop/urdf_export.h"
 #include "interop/bvh_export.h"
 #include "interop/gltf_export.h"
+#include "json_stream.h"
 
 namespace spacetime {
 namespace {
 
 using json = nlohmann::ordered_json;
-
-json vec3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-json rows(const Eigen::MatrixXd& m) {
-  json out = json::array();
-  for (int r = 0; r < m.rows(); ++r) {
-    json row = json::array();
-    for (int c = 0; c < m.cols(); ++c) row.push_back(m(r, c));
-    out.push_back(row);
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -215,54 +204,103 @@ std::string motionCsv(const Animation& animation) {
 }
 
 std::string motionJson(const Animation& animation) {
-  json j;
-  j["formatVersion"] = 1;
-  json chars = json::array();
+  std::string text;
+  JsonStream out(&text);
+  auto rows = [&](const Eigen::MatrixXd& m) {
+    out.beginArray();
+    for (Eigen::Index r = 0; r < m.rows(); ++r) out.array(m.row(r));
+    out.endArray();
+  };
+  auto points = [&](const std::vector<Eigen::Vector3d>& v) {
+    out.beginArray();
+    for (const Eigen::Vector3d& x : v) out.array(x);
+    out.endArray();
+  };
+  out.beginObject();
+  out.key("formatVersion");
+  out.value(1);
+  out.key("characters");
+  out.beginArray();
   for (const CharacterAnimation& c : animation.characters) {
-    json jc;
-    jc["name"] = c.name;
-    jc["urdf"] = c.name + ".urdf";
-    jc["gravity"] = vec3(c.gravity);
-    jc["dofs"] = c.dofs;
-    jc["actuated"] = c.actuated;
-    jc["times"] = c.times;
-    jc["q"] = rows(c.q);
-    jc["qd"] = rows(c.qd);
-    jc["qdd"] = rows(c.qdd);
+    out.beginObject();
+    out.key("name");
+    out.value(c.name);
+    out.key("urdf");
+    out.value(c.name + ".urdf");
+    out.key("gravity");
+    out.array(c.gravity);
+    out.key("dofs");
+    out.beginArray();
+    for (const std::string& d : c.dofs) out.value(d);
+    out.endArray();
+    out.key("actuated");
+    out.beginArray();
+    for (bool a : c.actuated) out.value(a);
+    out.endArray();
+    out.key("times");
+    out.beginArray();
+    for (double t : c.times) out.value(t);
+    out.endArray();
+    out.key("q");
+    rows(c.q);
+    out.key("qd");
+    rows(c.qd);
+    out.key("qdd");
+    rows(c.qdd);
     // q-dot's left limit where it differs from qd: the frames at a touch-down's impact (at the
     // root's other breakpoints the two sides differ by rounding only, ~1e-15).
-    json before = json::array();
+    out.key("qdBefore");
+    out.beginArray();
     if (c.qdBefore.rows() == c.qd.rows())
       for (Eigen::Index f = 0; f < c.qd.rows(); ++f)
         if ((c.qdBefore.row(f) - c.qd.row(f)).cwiseAbs().maxCoeff() > 1e-9 * (1 + c.qd.row(f).cwiseAbs().maxCoeff())) {
-          json row = json::array();
-          for (Eigen::Index d = 0; d < c.qd.cols(); ++d) row.push_back(c.qdBefore(f, d));
-          before.push_back({{"frame", f}, {"qd", row}});
+          out.beginObject();
+          out.key("frame");
+          out.value(static_cast<int>(f));
+          out.key("qd");
+          out.array(c.qdBefore.row(f));
+          out.endObject();
         }
-    jc["qdBefore"] = before;
-    jc["tau"] = rows(c.tau);
-    json contacts = json::array();
+    out.endArray();
+    out.key("tau");
+    rows(c.tau);
+    out.key("contacts");
+    out.beginArray();
     for (const ContactTrack& t : c.contacts) {
-      json jt;
-      jt["term"] = t.term;
-      jt["link"] = t.link;
-      jt["pointIndex"] = t.pointIndex;
-      jt["start"] = t.start;  // the interval as solved (with a free end, where it let go)
-      jt["end"] = t.end;
-      jt["freeEnd"] = t.freeEnd;
-      json p = json::array(), f = json::array();
-      for (const auto& x : t.position) p.push_back(vec3(x));
-      for (const auto& x : t.force) f.push_back(vec3(x));
-      jt["point"] = p;
-      jt["force"] = f;
-      if (t.impact) jt["impact"] = {{"time", t.impactTime}, {"impulse", vec3(t.impulse)}};
-      contacts.push_back(jt);
+      out.beginObject();
+      out.key("term");
+      out.value(t.term);
+      out.key("link");
+      out.value(t.link);
+      out.key("pointIndex");
+      out.value(t.pointIndex);
+      out.key("start");  // the interval as solved (with a free end, where it let go)
+      out.value(t.start);
+      out.key("end");
+      out.value(t.end);
+      out.key("freeEnd");
+      out.value(t.freeEnd);
+      out.key("point");
+      points(t.position);
+      out.key("force");
+      points(t.force);
+      if (t.impact) {
+        out.key("impact");
+        out.beginObject();
+        out.key("time");
+        out.value(t.impactTime);
+        out.key("impulse");
+        out.array(t.impulse);
+        out.endObject();
+      }
+      out.endObject();
     }
-    jc["contacts"] = contacts;
-    chars.push_back(jc);
+    out.endArray();
+    out.endObject();
   }
-  j["characters"] = chars;
-  return j.dump() + "\n";
+  out.endArray();
+  out.endObject();
+  return text + "\n";
 }
 
 namespace {
