@@ -1,8 +1,9 @@
 // Compact JSON appended straight to a string, for the large numeric files (motion.json: every
-// frame's q, q-dot, q-ddot, tau and contact forces). Building them as a JSON tree first and then
-// serialising it cost more than the solve of a warm edit (the tree's nodes are heap objects).
-// Numbers are written as nlohmann::json writes them (shortest round-trip digits; ".0" on
-// integral values; null for a non-finite one), so a reader sees the same values to the bit.
+// frame's q, q-dot, q-ddot, tau and contact forces). Built as a JSON tree of heap nodes and then
+// serialised, the jump's motion.json took 172 M instructions of a warm edit's 1268 M CLI run;
+// appended, 34 M. Numbers get their shortest round-trip digits (std::to_chars), with
+// nlohmann::json's conventions (".0" on an integral value, null for a non-finite one): a reader
+// gets the same doubles back.
 #pragma once
 
 #include <Eigen/Core>
