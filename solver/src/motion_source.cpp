@@ -65,6 +65,7 @@ class ProblemMotion final : public MotionSource {
 class AnimationMotion final : public MotionSource {
  public:
   explicit AnimationMotion(const Animation& a) : a_(a) {}
+  bool sampled() const override { return true; }
   double start() const override { return first(&CharacterAnimation::times, true); }
   double end() const override { return first(&CharacterAnimation::times, false); }
   int character(const std::string& id, int dofs) const override {

@@ -1265,6 +1265,13 @@ int SpacetimeProblem::initializeFrom(const MotionSource& previous) {
   const double t0 = std::max(spline.start(), previous.start());
   const double t1 = std::min(spline.end(), previous.end());
   auto clampTime = [&](double t) { return std::clamp(t, t0, t1); };
+  // A sampled motion's frames are fitted without smoothing (eight samples per segment determine
+  // the fit; with the fit's default the joints started 4.6e-6 rad off a 1 kHz file's motion,
+  // 9.4e-10 without). Another problem's splines keep the smoothing: unsmoothed, a finer
+  // transcription whose knots contain the old ones starts exactly where the last one ended (the
+  // 1.2 m rung 61 -> 50 s), but after a stall that only changes the path, and the planar
+  // quadruped's hop then ended at its 100 multiplier updates instead of valid (docs/design.md).
+  const double fitSmoothing = previous.sampled() ? 0.0 : CubicBSpline::kDefaultSmoothing;
   for (size_t c = 0; c < characters_.size(); ++c) {
     const CharacterVariables& cv = characters_[c];
     const int pc = counterpart[c];
@@ -1281,10 +1288,7 @@ int SpacetimeProblem::initializeFrom(const MotionSource& previous) {
           const Eigen::VectorXd q = previous.jointState(pc, clampTime(times[i]), 0);
           for (int k = 0; k < n; ++k) values(i, k) = q[g.dofs[k]];
         }
-        // No smoothing: eight samples per segment determine the fit, and onto the same or nested
-        // knots it reproduces the previous spline exactly (the default 1e-6 left 4.6e-6 rad at
-        // the clip's start and moved every refinement's warm start off its optimum).
-        const Eigen::MatrixXd ctrl = spline.fit(times, values, 0.0);
+        const Eigen::MatrixXd ctrl = spline.fit(times, values, fitSmoothing);
         for (int k = 0; k < ctrl.rows(); ++k)
           for (int d = 0; d < n; ++d) x_[g.offset + k * n + d] = ctrl(k, d);
         continue;

@@ -62,8 +62,9 @@ class CubicBSpline {
 
   // Least-squares control points whose spline passes near (times[i], values.row(i)), with a
   // small acceleration regulariser so that under-determined segments stay smooth.
+  static constexpr double kDefaultSmoothing = 1e-6;
   Eigen::MatrixXd fit(const std::vector<double>& times, const Eigen::MatrixXd& values,
-                      double smoothing = 1e-6) const;
+                      double smoothing = kDefaultSmoothing) const;
 
   bool operator==(const CubicBSpline& o) const {
     return t0_ == o.t0_ && t1_ == o.t1_ && segments_ == o.segments_ && breaks_ == o.breaks_;

@@ -43,6 +43,8 @@ class MotionSource {
   virtual std::vector<double> anchors(const std::string& term, int points, int forceDims) const = 0;
   // Each point's world impulse at the touch-down, empty without one.
   virtual std::vector<Eigen::Vector3d> impulses(const std::string& term, int points, int forceDims) const = 0;
+  // Whether the motion is sampled frames (a motion file) rather than another problem's splines.
+  virtual bool sampled() const { return false; }
 };
 
 // The solution `problem` holds now (it must outlive the source).
@@ -58,18 +60,18 @@ int startFromMotion(SpacetimeProblem& problem, const Animation& animation);
 
 // The method a solve started by startFromMotion runs when `method` was the scene's: a motion
 // file has no multipliers, and even from estimated ones (motionStartReadsMultipliers below) the
-// augmented Lagrangian's Newton polish does not always finish (from their own motion files the 3D
-// lamp took 290 LM iterations and 45 Newton steps, 6.4 s, the biped 349 and 42, 18.7 s), where
-// sqp's first program computes them and its steps end at the motion's optimum in 1-2 (1.5 and
-// 0.7 s; docs/performance.md, "Starting from a motion file"). So `al` becomes `sqp`; the other
-// methods stay.
+// augmented Lagrangian's Newton polish does not always finish (from its own motion file the 3D
+// lamp took 120 LM iterations and 17 Newton steps, 2.8 s), where sqp's first program computes
+// them and its steps end at the motion's optimum in 0-2 (the 3D lamp 1.55 s; the biped 1.06 s,
+// where the polish alone takes 0.68 s; docs/performance.md, "Starting from a motion file"). So
+// `al` becomes `sqp`; the other methods stay.
 SolverMethod methodForMotionStart(SolverMethod method);
 
 // Whether `method`, started from a motion file, reads the multipliers from the problem's state,
 // so that they are estimated first (estimateMultipliers, solver/multiplier_estimate.h): the
 // augmented Lagrangian (its warm start is the Newton polish, whose active set is lambda + rho g)
 // and witkin-kass (whose warm start is the augmented Lagrangian's). From the jump's own motion
-// file both then end at its optimum in 6 Newton steps instead of re-running the whole path (375
+// file both then end at its optimum in 3 Newton steps instead of re-running the whole path (375
 // LM iterations) to another. `sqp` computes them in its first program: started warm from the
 // estimate, the 3D lamp took 7 steps instead of 2. The interior point computes its own.
 bool motionStartReadsMultipliers(SolverMethod method);
