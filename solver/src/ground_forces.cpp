@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "core/nnls.h"
 #include "dynamics/algorithms.h"
@@ -37,13 +38,23 @@ PointForce<double> pointForce(const ContactVariables& ct, size_t p, const Eigen:
   return pf;
 }
 
+// The contacts acting on character c at t on the given side of it: After leaves out those that
+// end at t (the flight after a lift-off), Before those that begin at t (the flight before a
+// touch-down).
+std::vector<int> activeOnSide(const SpacetimeProblem& problem, int c, double t, Side side) {
+  std::vector<int> active = problem.activeContacts(c, t, side == Side::After);
+  if (side == Side::Before)
+    std::erase_if(active, [&](int j) { return problem.contacts()[j].start > t - kTimeTolerance; });
+  return active;
+}
+
 }  // namespace
 
 GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Side side) {
   GroundForces out(problem.contacts().size());
   for (size_t j = 0; j < out.size(); ++j)
     out[j].assign(problem.contacts()[j].points.points.size(), Eigen::Vector3d::Zero());
-  const std::vector<int> active = problem.activeContacts(c, t, side == Side::After);
+  const std::vector<int> active = activeOnSide(problem, c, t, side);
   if (active.empty()) return out;
 
   const CharacterVariables& cv = problem.characters()[c];
@@ -113,7 +124,7 @@ std::vector<PointForce<double>> groundPointForcesAt(const SpacetimeProblem& prob
   GroundForces computed;
   const GroundForces& f = forces ? *forces : (computed = groundForcesAt(problem, c, t, side));
   std::vector<PointForce<double>> out;
-  for (int j : problem.activeContacts(c, t, side == Side::After))
+  for (int j : activeOnSide(problem, c, t, side))
     for (size_t p = 0; p < f[j].size(); ++p) out.push_back(pointForce(problem.contacts()[j], p, f[j][p]));
   return out;
 }

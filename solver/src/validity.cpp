@@ -38,21 +38,17 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
   const Model<double>& model = *problem.characters()[c].model;
   const int n = model.dofCount();
   Data<double> data(model);
-  // What acts at time t: the actuated joints' torques and the ground's point forces (none inside
-  // a flight), from one NNLS; at a breakpoint, on the given side of it.
-  struct Loads {
-    Eigen::VectorXd tau;
-    std::vector<PointForce<double>> ground;
-  };
+  // What acts at time t: the actuated joints' torques, at a breakpoint on the given side of it.
+  // The ground pushes on no side of a flight's instants (its ends read on the flight's side), so
+  // the torques are the RNEA of the motion alone.
   auto loadsAt = [&](double t, Side side) {
-    const GroundForces forces = groundForcesAt(problem, c, t, side);
-    Loads l{generalizedForcesAt(problem, c, t, &forces, side), groundPointForcesAt(problem, c, t, &forces, side)};
+    Eigen::VectorXd tau = generalizedForcesAt(problem, c, t, nullptr, side);
     for (int d = 0; d < n; ++d)
-      if (!model.bodies[model.dofBody[d]].actuated) l.tau[d] = 0;
-    return l;
+      if (!model.bodies[model.dofBody[d]].actuated) tau[d] = 0;
+    return tau;
   };
-  auto accel = [&](const Loads& l, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-    return aba(model, data, q.data(), qd.data(), l.tau.data(), l.ground);
+  auto accel = [&](const Eigen::VectorXd& tau, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    return aba(model, data, q.data(), qd.data(), tau.data(), {});
   };
   // The root's acceleration, and with it the torques, jumps at every breakpoint (its Hermite
   // intervals join with C1 only; the lift-off and the touch-down are breakpoints too), so RK4
@@ -73,14 +69,14 @@ void simulateFlight(const SpacetimeProblem& problem, int c, double t0, double t1
     const int steps = static_cast<int>(std::ceil((b - a) / maxStep));
     const double h = (b - a) / steps;
     // The loads depend on time alone: RK4's two midpoint stages share theirs, and a step's end
-    // is the next step's start, so each step evaluates two sets (the RNEA and the NNLS behind
-    // them cost more than the ABA).
-    Loads start = loadsAt(a, Side::After);
+    // is the next step's start, so each step evaluates two sets (the RNEA behind them costs more
+    // than the ABA).
+    Eigen::VectorXd start = loadsAt(a, Side::After);
     for (int s = 0; s < steps; ++s) {
       if (cancel && cancel->load(std::memory_order_relaxed)) return;
       const double t = a + s * h;
-      const Loads mid = loadsAt(t + 0.5 * h, Side::Contacts);
-      const Loads end = loadsAt(t + h, s + 1 == steps ? Side::Before : Side::Contacts);
+      const Eigen::VectorXd mid = loadsAt(t + 0.5 * h, Side::Contacts);
+      const Eigen::VectorXd end = loadsAt(t + h, s + 1 == steps ? Side::Before : Side::Contacts);
       const Eigen::VectorXd k1v = qd, k1a = accel(start, q, qd);
       const Eigen::VectorXd k2v = qd + 0.5 * h * k1a, k2a = accel(mid, q + 0.5 * h * k1v, k2v);
       const Eigen::VectorXd k3v = qd + 0.5 * h * k2a, k3a = accel(mid, q + 0.5 * h * k2v, k3v);

@@ -35,7 +35,8 @@ using GroundForces = std::vector<std::vector<Eigen::Vector3d>>;
 // Forces of every point of every contact of the problem (indexed like problem.contacts()) on
 // character c at time t: zero for contacts of other characters or not active at t.
 // Side::After: the flight side of a lift-off at t (Sample::after) - the motion of the interval
-// that starts at t, without the contacts that end there.
+// that starts at t, without the contacts that end there; Side::Before: the flight side of a
+// touch-down at t - the interval that ends at t, without the contacts that begin there.
 GroundForces groundForcesAt(const SpacetimeProblem& problem, int c, double t, Side side = Side::Contacts);
 
 // The same as point forces for RNEA; `forces` is groundForcesAt(problem, c, t) if given.
