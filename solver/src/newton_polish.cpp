@@ -85,6 +85,10 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // so redundant held rows (degenerate contacts) still factorise; it acts on the change of y only.
   const double dw = 1e-10, dc = 1e-8;
   double lastShift = 0;
+  // The line search's rows; swapped with `rows` at an accepted step, so the next trial reuses
+  // the Jacobian's storage: a new one copied the pattern, and assigning it to `rows` copied it
+  // again (Eigen's sparse matrices have no move assignment).
+  RawRows trial;
   for (int it = 0;; ++it) {
     std::vector<int> constraint;
     for (int r = 0; r < rowCount; ++r)
@@ -158,10 +162,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     for (size_t i = 0; i < objective.size(); ++i) w[objective[i]] = r[static_cast<Eigen::Index>(i)];
     for (int i = 0; i < m; ++i) w[constraint[i]] = y[i];
     Triplets t = evaluator.curvature(w, threads);
-    const SpMat G = SpMat(Jr.transpose()) * Jr;
-    for (int k = 0; k < G.outerSize(); ++k)
-      for (SpMat::InnerIterator e(G, k); e; ++e)
-        if (e.row() >= e.col()) t.emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    evaluator.appendGaussNewton(rows, &t);
     result.hessianSeconds += secondsSince(phase);
     phase = Clock::now();
     for (int k = 0; k < A.outerSize(); ++k)
@@ -224,7 +225,6 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     // Full Newton steps near a KKT point; halve while the step makes the violation or the KKT
     // residual worse (the polish is local: a step that keeps failing means the active set or the
     // starting point is not good enough, and the augmented Lagrangian carries on).
-    RawRows trial;
     bool accepted = false;
     for (double alpha = 1; alpha >= 0.125 && !accepted; alpha /= 2) {
       vars.plus(x, alpha * d.head(n));
@@ -246,7 +246,8 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     result.lineSearchSeconds += secondsSince(phase);
     if (!accepted) return giveUp("a Newton step did not reduce the KKT residual");
     x = vars.save();
-    rows = std::move(trial);
+    rows.values.swap(trial.values);  // O(1): Eigen's swaps exchange the storage
+    rows.jacobian.swap(trial.jacobian);
   }
 }
 

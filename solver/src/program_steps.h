@@ -25,14 +25,6 @@ inline void appendTriplets(const SpRow& M, int rowOffset, int colOffset, Triplet
       t->emplace_back(rowOffset + row, colOffset + static_cast<int>(e.col()), e.value());
 }
 
-// Appends the lower triangle of J_r^T J_r, the objective's Gauss-Newton Hessian.
-inline void appendGaussNewton(const SpRow& Jr, Triplets* t) {
-  const SpMat G = SpMat(Jr.transpose()) * Jr;
-  for (int k = 0; k < G.outerSize(); ++k)
-    for (SpMat::InnerIterator e(G, k); e; ++e)
-      if (e.row() >= e.col()) t->emplace_back(static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
-}
-
 // A linearised inequality above this is crossed by the step.
 constexpr double kCrossed = 1e-9;
 

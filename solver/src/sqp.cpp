@@ -264,7 +264,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
       for (int row : objective) w[row] = rows.values[row];
       ht = evaluator.curvature(w, threads);
     }
-    raw::appendGaussNewton(Jr, &ht);
+    evaluator.appendGaussNewton(rows, &ht);
     summary.hessianSeconds += secondsSince(phase);
 
     std::vector<int> held;  // indices into `inequality`
@@ -430,7 +430,8 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
     }
     y += alpha * (yNew - y);
     lastViolation = merit.violation;
-    rows = std::move(trial);
+    rows.values.swap(trial.values);  // O(1); Eigen's sparse matrices have no move assignment
+    rows.jacobian.swap(trial.jacobian);
     if (alpha > kCreepingStep) {
       creepingSteps = 0;
     } else {

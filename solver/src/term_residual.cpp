@@ -133,14 +133,27 @@ Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w) const {
   B_.apply(stacked(blocks_.data()).data(), z.data());
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Hz(nz, nz);
   kernel_->weightedHessian(z.data(), w, Hz.data());
-  // B^T Hz B one pair of B's nonzeros at a time: B has a few nonzeros per row and Hz is zero
-  // outside the nonlinear inputs, so this is a fraction of the dense product's work (which was
-  // most of a Newton step's Hessian once the kernels' own Hessians got cheap).
+  // B^T Hz B one pair of B's nonzeros at a time, in the pairs' order, skipping the pairs whose
+  // Hz entry is zero: each z row's list of B's entries under a nonzero of Hz (in entry order) is
+  // made once per call, so a pair that adds nothing is not visited (the flight's dynamics: 108^2
+  // pairs, Hz nonzero in about 140 of its 324 entries). Visiting every pair was most of the
+  // curvature's time in a warm edit's Newton steps; the sums, in the same order, are the same to
+  // the bit.
+  thread_local std::vector<int> under, start;
+  const int nEntries = static_cast<int>(B_.entries.size());
+  under.clear();
+  start.assign(nz + 1, 0);
+  for (int i = 0; i < nz; ++i) {
+    start[i] = static_cast<int>(under.size());
+    for (int e = 0; e < nEntries; ++e)
+      if (Hz(i, B_.entries[e].row) != 0) under.push_back(e);
+  }
+  start[nz] = static_cast<int>(under.size());
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(B_.cols, B_.cols);
   for (const SparseMap::Entry& e1 : B_.entries)
-    for (const SparseMap::Entry& e2 : B_.entries) {
-      const double h = Hz(e1.row, e2.row);
-      if (h != 0) H(e1.col, e2.col) += e1.value * h * e2.value;
+    for (int u = start[e1.row]; u < start[e1.row + 1]; ++u) {
+      const SparseMap::Entry& e2 = B_.entries[under[u]];
+      H(e1.col, e2.col) += e1.value * Hz(e1.row, e2.row) * e2.value;
     }
   return H;
 }

@@ -192,7 +192,7 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
     phase = Clock::now();
     Triplets ht;
     for (int i = 0; i < n; ++i) ht.emplace_back(i, i, kObjectiveCurvatureFloor);
-    raw::appendGaussNewton(Jr, &ht);
+    evaluator.appendGaussNewton(rows, &ht);
     summary.hessianSeconds += secondsSince(phase);
     phase = Clock::now();
     std::vector<int> held;  // indices into `inequality`
