@@ -95,10 +95,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       if (held[r]) constraint.push_back(r);
     const int m = static_cast<int>(constraint.size());
     const Vec y = raw::selectValues(multipliers, constraint);
-    const SpRow Jr = raw::selectRows(rows.jacobian, objective), A = raw::selectRows(rows.jacobian, constraint);
     const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, constraint);
-    const Vec grad = Jr.transpose() * r;
-    const double kkt = (grad + A.transpose() * y).lpNorm<Eigen::Infinity>() /
+    const Vec grad = raw::transposeTimes(rows.jacobian, objective, r);
+    const double kkt = (grad + raw::transposeTimes(rows.jacobian, constraint, y)).lpNorm<Eigen::Infinity>() /
                        std::max(1.0, grad.lpNorm<Eigen::Infinity>());
     const double heldViolation = c.size() ? c.lpNorm<Eigen::Infinity>() : 0.0;
     result.kktResidual = kkt;
@@ -165,8 +164,8 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     evaluator.appendGaussNewton(rows, &t);
     result.hessianSeconds += secondsSince(phase);
     phase = Clock::now();
-    for (int k = 0; k < A.outerSize(); ++k)
-      for (SpRow::InnerIterator e(A, k); e; ++e) t.emplace_back(n + static_cast<int>(e.row()), static_cast<int>(e.col()), e.value());
+    for (int k = 0; k < m; ++k)
+      for (SpRow::InnerIterator e(rows.jacobian, constraint[k]); e; ++e) t.emplace_back(n + k, static_cast<int>(e.col()), e.value());
     for (int i = 0; i < m; ++i) t.emplace_back(n + i, n + i, -dc);
     // Inertia correction: the step minimises the local quadratic model on the constraints'
     // tangent space only if K has exactly m negative eigenvalues, which the signs of LDL^T's D
@@ -233,10 +232,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       result.jacobianSeconds += secondsSince(t0);
       if (!finite) continue;
       const Vec yTrial = y + alpha * (d.tail(m) - y);
-      const SpRow At = raw::selectRows(trial.jacobian, constraint), Jt = raw::selectRows(trial.jacobian, objective);
-      const Vec gt = Jt.transpose() * raw::selectValues(trial.values, objective);
+      const Vec gt = raw::transposeTimes(trial.jacobian, objective, raw::selectValues(trial.values, objective));
       const Vec ct = raw::selectValues(trial.values, constraint);
-      const double kktTrial = (gt + At.transpose() * yTrial).lpNorm<Eigen::Infinity>() / std::max(1.0, gt.lpNorm<Eigen::Infinity>());
+      const double kktTrial = (gt + raw::transposeTimes(trial.jacobian, constraint, yTrial)).lpNorm<Eigen::Infinity>() / std::max(1.0, gt.lpNorm<Eigen::Infinity>());
       // Only the held rows judge the step: an inequality it violates is held at the next step.
       const double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;
       accepted = std::max(kktTrial, violTrial) < std::max(kkt, heldViolation);

@@ -51,6 +51,18 @@ inline SpRow selectRows(const SpRow& J, const std::vector<int>& which) {
   return S;
 }
 
+// J_S^T v for the rows S = `which` of J, v one value per row of S: the product of
+// selectRows(J, which) transposed and v, summed in the same order (row by row, as Eigen's sparse
+// transpose-times-vector does), so to the bit, without copying the rows.
+inline Vec transposeTimes(const SpRow& J, const std::vector<int>& which, const Vec& v) {
+  Vec out = Vec::Zero(J.cols());
+  for (size_t i = 0; i < which.size(); ++i) {
+    const double vi = v[static_cast<Eigen::Index>(i)];
+    for (SpRow::InnerIterator e(J, which[i]); e; ++e) out[e.col()] += e.value() * vi;
+  }
+  return out;
+}
+
 // The parameter blocks that may move, in the order of the Jacobian's columns (Ceres's
 // Problem::Evaluate with these blocks), and the column of each of their coordinates. Held
 // stances keep some coordinates constant through a SubsetManifold: those have no column.
