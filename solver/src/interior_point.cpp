@@ -74,7 +74,7 @@ class HessianPattern {
     }
     for (size_t k = 0; k < terms_.size(); ++k) {
       if (terms_[k].empty()) continue;
-      const Eigen::MatrixXd H = evaluator.terms()[k]->weightedHessianNow(w.data() + evaluator.firstRow(k));
+      const Eigen::MatrixXd H = evaluator.terms()[k]->weightedHessianNow(w.data() + evaluator.firstRow(k), &evaluator.columns(k));
       for (const Scatter& s : terms_[k]) values[s.slot] += H(s.a, s.b);
     }
   }

@@ -222,8 +222,8 @@ class RawEvaluator {
         // add no curvature; their finite differences of Jacobians were most of its Hessian.
         const double* weights = w.data() + firstRow_[k];
         if (std::all_of(weights, weights + term->num_residuals(), [](double x) { return x == 0; })) continue;
-        const Eigen::MatrixXd H = term->weightedHessianNow(weights);
         const std::vector<int>& col = columns_[k];
+        const Eigen::MatrixXd H = term->weightedHessianNow(weights, &col);
         for (int i = 0; i < H.rows(); ++i)
           for (int j = 0; j < H.cols(); ++j)
             if (col[i] >= 0 && col[j] >= 0 && col[i] >= col[j] && H(i, j) != 0)

@@ -127,7 +127,7 @@ std::vector<double> TermResidual::rawRowsNow() const {
   return rows;
 }
 
-Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w) const {
+Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w, const std::vector<int>* columns) const {
   const int nz = kernel_->inputSize();
   Eigen::VectorXd z(nz);
   B_.apply(stacked(blocks_.data()).data(), z.data());
@@ -150,11 +150,16 @@ Eigen::MatrixXd TermResidual::weightedHessianNow(const double* w) const {
   }
   start[nz] = static_cast<int>(under.size());
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(B_.cols, B_.cols);
-  for (const SparseMap::Entry& e1 : B_.entries)
+  for (const SparseMap::Entry& e1 : B_.entries) {
+    const int c1 = columns ? (*columns)[e1.col] : 0;
+    if (c1 < 0) continue;
     for (int u = start[e1.row]; u < start[e1.row + 1]; ++u) {
       const SparseMap::Entry& e2 = B_.entries[under[u]];
+      // The caller's upper triangle is not read: half the pairs skipped, the rest summed as before.
+      if (columns && !((*columns)[e2.col] >= 0 && c1 >= (*columns)[e2.col])) continue;
       H(e1.col, e2.col) += e1.value * Hz(e1.row, e2.row) * e2.value;
     }
+  }
   return H;
 }
 

@@ -115,8 +115,11 @@ class TermResidual : public ceres::CostFunction {
   // The kernel's inputs z = B p at the parameters' current values.
   Eigen::VectorXd inputsNow() const;
   // B^T H_z B at the parameters' current values: the Hessian, in the stacked parameter blocks,
-  // of sum_r w[r] raw row r (Kernel::weightedHessian). Not for moving residuals.
-  Eigen::MatrixXd weightedHessianNow(const double* w) const;
+  // of sum_r w[r] raw row r (Kernel::weightedHessian). Not for moving residuals. With `columns`
+  // (each stacked input's column in the caller's matrix, -1: none) only the entries (i, j) with
+  // columns[i] >= columns[j] >= 0 are computed, the lower triangle the callers keep; the others
+  // are left zero.
+  Eigen::MatrixXd weightedHessianNow(const double* w, const std::vector<int>* columns = nullptr) const;
   // The stacked parameter columns the kernel's nonlinear inputs read, sorted: where
   // weightedHessianNow can be nonzero (rows and columns).
   std::vector<int> nonlinearColumns() const;
