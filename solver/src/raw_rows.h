@@ -267,8 +267,6 @@ class RawEvaluator {
         t->emplace_back(static_cast<int>(e.row()), j, e.value());
   }
 
-
-
  private:
   // The Jacobian's row pattern: term k's rows hold the sorted tangent columns its blocks move
   // (width_[k] of them); stacked input i of the term lands in slot slot_[slotStart_[k] + i] of
