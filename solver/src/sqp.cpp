@@ -174,10 +174,10 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   if (!evaluator.evaluate(&rows, true)) why = "the rows at the starting point are not finite";
   for (int step = 0; why.empty() && !done; ++step) {
     const Merit merit = meritOf(rows.values);
-    const SpRow Jr = raw::selectRows(rows.jacobian, objective), A = raw::selectRows(rows.jacobian, equality);
+    const SpRow A = raw::selectRows(rows.jacobian, equality);
     const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, equality);
     const Vec g = raw::selectValues(rows.values, inequality);
-    const Vec grad = Jr.transpose() * r;
+    const Vec grad = raw::transposeTimes(rows.jacobian, objective, r);  // J_r^T r, J_r not copied
     const double kkt = (grad + rows.jacobian.transpose() * y).lpNorm<Eigen::Infinity>() /
                        std::max(1.0, grad.lpNorm<Eigen::Infinity>());
     summary.sqpSteps = step;

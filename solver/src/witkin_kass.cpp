@@ -147,10 +147,10 @@ SolverSummary solveWitkinKass(SpacetimeProblem& problem, const SolverOptions& op
       break;
     }
     summary.jacobianSeconds += secondsSince(phase);
-    const SpRow Jr = raw::selectRows(rows.jacobian, objective), A = raw::selectRows(rows.jacobian, equality);
+    const SpRow A = raw::selectRows(rows.jacobian, equality);
     const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, equality);
     const Vec g = raw::selectValues(rows.values, inequality);
-    const Vec grad = Jr.transpose() * r;
+    const Vec grad = raw::transposeTimes(rows.jacobian, objective, r);  // J_r^T r, J_r not copied
     const double f = 0.5 * r.squaredNorm();
     const double kkt = (grad + rows.jacobian.transpose() * y).lpNorm<Eigen::Infinity>() /
                        std::max(1.0, grad.lpNorm<Eigen::Infinity>());
