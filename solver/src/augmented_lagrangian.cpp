@@ -318,6 +318,7 @@ void addPolishTo(const PolishResult& result, SolverSummary* summary) {
   summary->hessianSeconds += result.hessianSeconds;
   summary->factorisationSeconds += result.factorisationSeconds;
   summary->lineSearchSeconds += result.lineSearchSeconds;
+  summary->qpSeconds += result.programSeconds;
 }
 
 SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& options,
@@ -372,14 +373,17 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // It stops at the solve's own time limit.
   int polishAttempts = 0;
   double lastPolishViolation = 1e300;
-  auto polish = [&](int maxIterations) {
+  bool lastPolishSettled = false;  // its active set was settled by a program (PolishOptions)
+  auto polish = [&](int maxIterations, bool settleActiveSet = false) {
     PolishOptions po;
+    po.settleActiveSet = settleActiveSet;
     po.tolerance = options.tolerance;
     po.maxIterations = maxIterations;
     po.threads = options.threads;
     po.deadline = deadline;
     const PolishResult result = polishNewton(problem, po, cancel);
     addPolishTo(result, &summary);
+    lastPolishSettled = result.settledActiveSet;
     if (!result.converged) return false;
     m = measure(problem);
     summary.status = SolveStatus::Converged;
@@ -405,8 +409,13 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // A warm start (the editor re-solving after an edit) begins next to the new optimum, with the
   // old one's multipliers and active set: Newton steps go straight there, where the augmented
   // Lagrangian at the old, large penalty would crawl (luxo_jump with its end pose moved 2 cm:
-  // 606 LM iterations). If they fail, the outer loop starts as it would have.
-  const bool polishedWarm = options.newtonPolish && options.warmStart && !freeEndsHeld && polish(options.maxPolishIterations);
+  // 606 LM iterations); where the edit changes which inequalities are active, a quadratic
+  // program finds the new active set before the steps (PolishOptions::settleActiveSet), and where
+  // the steps from it fail, they run once more finding it a row at a time. If they fail, the
+  // outer loop starts as it would have.
+  const bool polishedWarm = options.newtonPolish && options.warmStart && !freeEndsHeld &&
+                            (polish(options.maxPolishIterations, true) ||
+                             (lastPolishSettled && polish(options.maxPolishIterations)));
   // A cold start tries a few Newton steps first as well: where the task is a quadratic program
   // (the particle scenes: linear dynamics, quadratic effort, point constraints) the first step
   // lands on the optimum. Elsewhere they fail at once and restore the default guess (the jump:

@@ -9,7 +9,9 @@
 #include <chrono>
 #include <cmath>
 
+#include "program_steps.h"
 #include "raw_rows.h"
+#include "solver/quadratic_program.h"
 
 namespace spacetime {
 namespace {
@@ -23,6 +25,61 @@ using raw::SpRow;
 using raw::Triplets;
 using raw::Variables;
 using raw::Vec;
+
+// The quadratic program that settles the held rows (PolishOptions::settleActiveSet) where the
+// first Newton step on them does not fit: min 1/2 d^T W d + g^T d on the linearised equalities and the inequalities within kMargin of their bound or held
+// (rows its step crosses join, and it is solved again), by the active-set steps from the held
+// rows (quadratic_program.h: one factorisation, then a solve per change of the working set).
+// Writes the program's active rows into `held` (rows it makes active into `added` too) and its
+// multipliers into `multipliers`; true if that changed the held rows. A program that does not
+// converge changes nothing: the Newton steps find the active set as without it.
+bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const Triplets& hessian, const Vec& grad,
+                     const Vec& metric, double tolerance, std::vector<char>* held, std::vector<char>* added, Vec* multipliers) {
+  const int n = static_cast<int>(grad.size());
+  std::vector<int> equality, inequality;
+  for (int row = 0; row < evaluator.rows(); ++row) {
+    if (evaluator.kind(row) == RowKind::Equality) equality.push_back(row);
+    if (evaluator.kind(row) == RowKind::Inequality) inequality.push_back(row);
+  }
+  std::vector<int> near;  // indices into `inequality`
+  for (size_t i = 0; i < inequality.size(); ++i)
+    if ((*held)[inequality[i]] || rows.values[inequality[i]] > -raw::kMargin) near.push_back(static_cast<int>(i));
+  QuadraticProgram program;
+  program.hessian.resize(n, n);
+  program.hessian.setFromTriplets(hessian.begin(), hessian.end());
+  program.gradient = grad;
+  program.equalities = raw::selectRows(rows.jacobian, equality);
+  program.equalityTargets = -raw::selectValues(rows.values, equality);
+  program.shiftMetric = metric;
+  const SpRow C = raw::selectRows(rows.jacobian, inequality);
+  const Vec g = raw::selectValues(rows.values, inequality);
+  QpWorkspace workspace;
+  std::vector<int> programRows;
+  for (int round = 0; round < raw::kMaxRounds; ++round) {
+    programRows.clear();
+    for (int i : near) programRows.push_back(inequality[static_cast<size_t>(i)]);
+    program.inequalities = raw::selectRows(rows.jacobian, programRows);
+    program.inequalityBounds = -raw::selectValues(rows.values, programRows);
+    QpOptions programOptions;
+    for (int row : programRows) programOptions.activeGuess.push_back((*held)[row]);
+    const QpResult qp = solveQuadraticProgram(program, programOptions, &workspace);
+    if (!qp.converged) return false;
+    if (raw::holdCrossedRows(g + C * qp.x, &near)) continue;
+    bool changed = false;
+    for (size_t i = 0; i < programRows.size(); ++i) {
+      const int row = programRows[i];
+      // A row the current point violates stays held, as the Newton steps hold it.
+      const char active = qp.active[i] || ((*held)[row] && rows.values[row] > tolerance);
+      changed = changed || active != (*held)[row];
+      if (active && !(*held)[row]) (*added)[row] = 1;
+      (*held)[row] = active;
+      (*multipliers)[row] = active ? qp.z[static_cast<Eigen::Index>(i)] : 0.0;
+    }
+    for (size_t i = 0; i < equality.size(); ++i) (*multipliers)[equality[i]] = qp.y[static_cast<Eigen::Index>(i)];
+    return changed;
+  }
+  return false;
+}
 
 }  // namespace
 
@@ -89,6 +146,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // the Jacobian's storage: a new one copied the pattern, and assigning it to `rows` copied it
   // again (Eigen's sparse matrices have no move assignment).
   RawRows trial;
+  bool settle = options.settleActiveSet;  // checked at the first Newton step only
   for (int it = 0;; ++it) {
     std::vector<int> constraint;
     for (int r = 0; r < rowCount; ++r)
@@ -162,6 +220,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     for (int i = 0; i < m; ++i) w[constraint[i]] = y[i];
     Triplets t = evaluator.curvature(w, threads);
     evaluator.appendGaussNewton(rows, &t);
+    const size_t hessianEnd = t.size();  // W's entries; K's constraint rows follow
     result.hessianSeconds += secondsSince(phase);
     phase = Clock::now();
     for (int k = 0; k < m; ++k)
@@ -219,6 +278,29 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     result.factorisationSeconds += secondsSince(phase);
     if (!d.allFinite()) return giveUp("the Newton step is not finite");
     ++result.solves;
+    if (settle) {
+      // The step on the held rows is the program's solution when it crosses no other
+      // inequality and every held one pushes; otherwise the program settles the held rows.
+      settle = false;
+      const Vec linear = rows.values + rows.jacobian * d.head(n);
+      bool fits = true;
+      for (int row = 0; row < rowCount && fits; ++row)
+        fits = evaluator.kind(row) != RowKind::Inequality || held[row] || linear[row] <= options.tolerance;
+      for (int i = 0; i < m && fits; ++i)
+        fits = evaluator.kind(constraint[i]) != RowKind::Inequality || d[n + i] >= pull;
+      if (!fits) {
+        phase = Clock::now();
+        t.resize(hessianEnd);
+        const bool changed = settleActiveSet(evaluator, rows, t, grad, raw::shiftMetric(problem, vars), options.tolerance,
+                                             &held, &added, &multipliers);
+        result.programSeconds += secondsSince(phase);
+        result.settledActiveSet = changed;
+        if (changed) {  // W's weights are the multipliers: the step starts again with the new ones
+          analysed = false;
+          continue;
+        }
+      }
+    }
     phase = Clock::now();
 
     // Full Newton steps near a KKT point; halve while the step makes the violation or the KKT

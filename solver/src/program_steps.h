@@ -28,6 +28,13 @@ inline void appendTriplets(const SpRow& M, int rowOffset, int colOffset, Triplet
 // A linearised inequality above this is crossed by the step.
 constexpr double kCrossed = 1e-9;
 
+// Inequalities within this of their bound (or with a multiplier) join a step's program; rows a
+// step then crosses join and it is solved again, up to kMaxRounds times. Of the jump's 4332
+// inequality rows 415 are within 0.05 at its optimum and 22 active (docs/design.md, inequality
+// screening).
+constexpr double kMargin = 0.05;
+constexpr int kMaxRounds = 10;
+
 // The inequalities a step's program left out that its step crosses (linearised values
 // `linear`, one per inequality) join `held` (indices into the inequalities, kept sorted);
 // true if any did.

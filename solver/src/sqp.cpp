@@ -17,6 +17,8 @@ namespace {
 using raw::appendTriplets;
 using raw::Clock;
 using raw::kAtBound;
+using raw::kMargin;
+using raw::kMaxRounds;
 using raw::RawEvaluator;
 using raw::RawRows;
 using raw::secondsSince;
@@ -25,11 +27,6 @@ using raw::Triplets;
 using raw::Variables;
 using raw::Vec;
 
-// Inequalities within this of their bound (or with a multiplier) join a step's program; rows a
-// step then crosses join and it is solved again. Of the jump's 4332 inequality rows 415 are
-// within 0.05 at its optimum and 22 active (docs/design.md, inequality screening).
-constexpr double kMargin = 0.05;
-constexpr int kMaxRounds = 10;  // re-solves of one step's program with the rows it crossed
 // The exact Hessian of the Lagrangian is indefinite far from feasibility (docs/design.md,
 // "Newton steps on the augmented Lagrangian's inner problem"); above this violation the
 // programs use the Gauss-Newton one, J_r^T J_r, convex by construction - until the line search

@@ -14,6 +14,8 @@ namespace spacetime {
 namespace {
 
 using raw::Clock;
+using raw::kMargin;
+using raw::kMaxRounds;
 using raw::RawEvaluator;
 using raw::RawRows;
 using raw::secondsSince;
@@ -40,10 +42,6 @@ constexpr int kFirstRestorationSteps = 25, kTrialRestorationSteps = 8;
 // restore near the constraints (measured in the identity metric: the heavy lamp to 2.8e-3 after
 // 4, from where it restored in one step; after 2, at 0.054, the restoration crawled).
 constexpr int kApproachUpdates = 4;
-// Inequalities within this of their bound (or with a multiplier) join a step's program; rows a
-// step crosses join it and it is solved again (as in sqp.cpp).
-constexpr double kMargin = 0.05;
-constexpr int kMaxRounds = 10;
 constexpr int kMaxHalvings = 12;
 constexpr double kArmijo = 1e-4;
 // Witkin and Kass's Newton step uses the objective's Hessian; here its Gauss-Newton part J_r^T

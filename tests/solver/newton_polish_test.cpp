@@ -215,10 +215,13 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
     EXPECT_TRUE(w.polished);
     if (small) {
       EXPECT_EQ(w.iterations, 0);
-      // The polish's passes are KKT solves and changes of its active set; the small edit needs
-      // both (every step is a solve, and the active set moves with the landing).
+      // The active set moves with the landing: the first Newton step on the old optimum's held
+      // rows crosses rows it does not hold, and a quadratic program settles the new active set
+      // (PolishOptions::settleActiveSet) before the steps go on - 4 KKT solves, where holding
+      // each crossed row as a step violated it took 11 and 8 changes of the active set.
+      EXPECT_GT(w.qpSeconds, 0);
       EXPECT_GT(w.newtonSolves, 0);
-      EXPECT_LT(w.newtonSolves, w.newtonSteps);
+      EXPECT_LE(w.newtonSolves, 4);
       std::string error;
       auto leastSquares = SpacetimeProblem::build(r.warm->scene(), &error);
       ASSERT_TRUE(leastSquares) << error;

@@ -162,7 +162,7 @@ struct SolverSummary {
   int newtonSolves = 0;
   int sqpSteps = 0;             // SolverMethod::Sqp, WitkinKass: their steps (quadratic programs)
   double sqpSeconds = 0;        // the time of those steps, their polish and restorations included
-  double qpSeconds = 0;         // of which in the quadratic programs
+  double qpSeconds = 0;         // of which in the quadratic programs (and the polish's, settling its active set)
   // Of the restoration phase (solver/restoration.h): after a stall, and every iterate of
   // SolverMethod::WitkinKass.
   int restorationSteps = 0;
