@@ -19,11 +19,12 @@
 //
 // The active set starts as the inequalities whose multiplier estimate lambda + rho g is
 // positive (with PolishOptions::settleActiveSet, a quadratic program settles it where the
-// first step does not fit it). An inequality a step violates is held from then on; one the polish added is
-// released when its multiplier pulls (y < 0); the rows held from the start are released only at
-// a KKT point of the held rows (where a contact force vanishes, the friction cone's sides and the
-// normal force reach zero together and their multipliers are not unique mid-way). A step is
-// accepted if it reduces max(KKT residual, violation of the held rows), halving up to 1/8.
+// first step does not fit it). An inequality a step violates is held from then on; one the
+// polish added is released when its multiplier pulls (y < 0); the rows held from the start are
+// released only at a KKT point of the held rows (where a contact force vanishes, the friction
+// cone's sides and the normal force reach zero together and their multipliers are not unique
+// mid-way). A step is accepted if it reduces max(KKT residual, violation of the held rows),
+// halving up to 1/8.
 //
 // A polish either ends at a point that meets the tolerance with a relative KKT residual below
 // kktTolerance and every held inequality pushing, with multipliers written back to the
