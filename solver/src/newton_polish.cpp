@@ -27,20 +27,18 @@ using raw::Variables;
 using raw::Vec;
 
 // The quadratic program that settles the held rows (PolishOptions::settleActiveSet) where the
-// first Newton step on them does not fit: min 1/2 d^T W d + g^T d on the linearised equalities and the inequalities within kMargin of their bound or held
-// (rows its step crosses join, and it is solved again), by the active-set steps from the held
-// rows (quadratic_program.h: one factorisation, then a solve per change of the working set).
+// first Newton step on them does not fit: min 1/2 d^T W d + g^T d on the linearised equalities
+// and the inequalities within kMargin of their bound or held (rows its step crosses join, and it
+// is solved again), by the active-set steps from the held rows (quadratic_program.h: one
+// factorisation, then a solve per change of the working set).
 // Writes the program's active rows into `held` (rows it makes active into `added` too) and its
 // multipliers into `multipliers`; true if that changed the held rows. A program that does not
 // converge changes nothing: the Newton steps find the active set as without it.
 bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const Triplets& hessian, const Vec& grad,
                      const Vec& metric, double tolerance, std::vector<char>* held, std::vector<char>* added, Vec* multipliers) {
   const int n = static_cast<int>(grad.size());
-  std::vector<int> equality, inequality;
-  for (int row = 0; row < evaluator.rows(); ++row) {
-    if (evaluator.kind(row) == RowKind::Equality) equality.push_back(row);
-    if (evaluator.kind(row) == RowKind::Inequality) inequality.push_back(row);
-  }
+  const raw::RowKinds kinds(evaluator);
+  const std::vector<int>&equality = kinds.equality, &inequality = kinds.inequality;
   std::vector<int> near;  // indices into `inequality`
   for (size_t i = 0; i < inequality.size(); ++i)
     if ((*held)[inequality[i]] || rows.values[inequality[i]] > -raw::kMargin) near.push_back(static_cast<int>(i));
