@@ -31,11 +31,13 @@ using raw::Vec;
 // and the inequalities within kMargin of their bound or held (rows its step crosses join, and it
 // is solved again), by the active-set steps from the held rows (quadratic_program.h: one
 // factorisation, then a solve per change of the working set).
-// Writes the program's active rows into `held` (rows it makes active into `added` too) and its
-// multipliers into `multipliers`; true if that changed the held rows. A program that does not
-// converge changes nothing: the Newton steps find the active set as without it.
+// Writes the program's active rows into `held` (rows it makes active into `added` too), its
+// multipliers into `multipliers` and its solution, the SQP step on its active set, into `step`;
+// true if that changed the held rows. A program that does not converge changes nothing: the
+// Newton steps find the active set as without it.
 bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const Triplets& hessian, const Vec& grad,
-                     const Vec& metric, double tolerance, std::vector<char>* held, std::vector<char>* added, Vec* multipliers) {
+                     const Vec& metric, double tolerance, std::vector<char>* held, std::vector<char>* added, Vec* multipliers,
+                     Vec* step) {
   const int n = static_cast<int>(grad.size());
   const raw::RowKinds kinds(evaluator);
   const std::vector<int>&equality = kinds.equality, &inequality = kinds.inequality;
@@ -74,6 +76,7 @@ bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const T
       (*multipliers)[row] = active ? qp.z[static_cast<Eigen::Index>(i)] : 0.0;
     }
     for (size_t i = 0; i < equality.size(); ++i) (*multipliers)[equality[i]] = qp.y[static_cast<Eigen::Index>(i)];
+    *step = qp.x;
     return changed;
   }
   return false;
@@ -144,7 +147,55 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // the Jacobian's storage: a new one copied the pattern, and assigning it to `rows` copied it
   // again (Eigen's sparse matrices have no move assignment).
   RawRows trial;
-  bool settle = options.settleActiveSet;  // checked at the first Newton step only
+  // The steps need the Jacobians of the objective rows, the equalities and the held rows, and of
+  // any inequality a trial point violates (it is held next): the other inequalities' blocks, most
+  // of the problem's, are evaluated without their Jets in the line search.
+  auto limitJacobiansToHeld = [&] {
+    std::vector<char> needed(rowCount, 1);
+    for (int row = 0; row < rowCount; ++row) needed[row] = evaluator.kind(row) != RowKind::Inequality || held[row];
+    evaluator.limitJacobians(needed, options.tolerance);
+  };
+  // Steps from x along dx with the held rows' multipliers moving from yFrom to yTo (both in the
+  // order of `constraint`): full steps near a KKT point, halved while the step makes the
+  // violation of the held rows or the KKT residual no smaller than `reference` (the polish is
+  // local: a step that keeps failing means the active set or the starting point is not good
+  // enough, and the augmented Lagrangian carries on). Without the programs only the held rows
+  // judge the step: an inequality it violates is held at the next step. An accepted point
+  // becomes x, its rows `rows` and its multipliers the held rows'; a rejected step leaves the
+  // variables at the last trial point.
+  auto lineSearch = [&](const Vec& dx, const std::vector<int>& constraint, const Vec& yFrom, const Vec& yTo,
+                        double reference) {
+    const Clock::time_point phase = Clock::now();
+    bool accepted = false;
+    for (double alpha = 1; alpha >= 0.125 && !accepted; alpha /= 2) {
+      vars.plus(x, alpha * dx);
+      t0 = Clock::now();
+      const bool finite = evaluator.evaluate(&trial, true);
+      result.jacobianSeconds += secondsSince(t0);
+      if (!finite) continue;
+      const Vec yTrial = yFrom + alpha * (yTo - yFrom);
+      const Vec gt = raw::transposeTimes(trial.jacobian, objective, raw::selectValues(trial.values, objective));
+      const Vec ct = raw::selectValues(trial.values, constraint);
+      const double kktTrial = (gt + raw::transposeTimes(trial.jacobian, constraint, yTrial)).lpNorm<Eigen::Infinity>() /
+                              std::max(1.0, gt.lpNorm<Eigen::Infinity>());
+      double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;
+      // Where programs settle the active set, every inequality judges the step: a step that
+      // fits its linearisation but violates a row outside the held ones by its curvature is
+      // cut (the jump's end pose moved 4 cm: a full step violated an inequality by 0.14, and
+      // the steps that held it churned until the polish failed).
+      if (options.settleActiveSet) violTrial = std::max(violTrial, inactiveViolation(trial.values));
+      accepted = std::max(kktTrial, violTrial) < reference;
+      if (accepted)
+        for (size_t i = 0; i < constraint.size(); ++i) multipliers[constraint[i]] = yTrial[static_cast<Eigen::Index>(i)];
+    }
+    result.lineSearchSeconds += secondsSince(phase);
+    if (accepted) {
+      x = vars.save();
+      rows.values.swap(trial.values);  // O(1): Eigen's swaps exchange the storage
+      rows.jacobian.swap(trial.jacobian);
+    }
+    return accepted;
+  };
   for (int it = 0;; ++it) {
     std::vector<int> constraint;
     for (int r = 0; r < rowCount; ++r)
@@ -182,15 +233,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
         activeSetChanged = true;
       }
     }
-    // The steps need the Jacobians of the objective rows, the equalities and the held rows, and
-    // of any inequality a trial point violates (it is held next): the other inequalities' blocks,
-    // most of the problem's, are evaluated without their Jets in the line search.
-    {
-      std::vector<char> needed(rowCount, 1);
-      for (int row = 0; row < rowCount; ++row)
-        needed[row] = evaluator.kind(row) != RowKind::Inequality || held[row];
-      evaluator.limitJacobians(needed, options.tolerance);
-    }
+    limitJacobiansToHeld();
     if (activeSetChanged) {
       analysed = false;
       if (it >= options.maxIterations) return giveUp(outOfSteps);
@@ -276,10 +319,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     result.factorisationSeconds += secondsSince(phase);
     if (!d.allFinite()) return giveUp("the Newton step is not finite");
     ++result.solves;
-    if (settle) {
+    if (options.settleActiveSet) {
       // The step on the held rows is the program's solution when it crosses no other
       // inequality and every held one pushes; otherwise the program settles the held rows.
-      settle = false;
       const Vec linear = rows.values + rows.jacobian * d.head(n);
       bool fits = true;
       for (int row = 0; row < rowCount && fits; ++row)
@@ -289,43 +331,31 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       if (!fits) {
         phase = Clock::now();
         t.resize(hessianEnd);
+        const Vec before = multipliers;
+        Vec programStep;
         const bool changed = settleActiveSet(evaluator, rows, t, grad, raw::shiftMetric(problem, vars), options.tolerance,
-                                             &held, &added, &multipliers);
+                                             &held, &added, &multipliers, &programStep);
         result.programSeconds += secondsSince(phase);
-        result.settledActiveSet = changed;
-        if (changed) {  // W's weights are the multipliers: the step starts again with the new ones
+        result.settledActiveSet = result.settledActiveSet || changed;
+        if (changed) {
+          // The program's solution is the SQP step on its active set (W's weights the held rows'
+          // old multipliers, N&W eq. 18.11): taken as the step, it saves the Newton step on the
+          // new rows that repeated it. Where it is not accepted the polish steps on from x with
+          // the program's rows and multipliers.
           analysed = false;
+          limitJacobiansToHeld();
+          std::vector<int> settled;
+          for (int row = 0; row < rowCount; ++row)
+            if (held[row]) settled.push_back(row);
+          if (!lineSearch(programStep, settled, raw::selectValues(before, settled), raw::selectValues(multipliers, settled),
+                          std::max(kkt, heldViolation)))
+            vars.load(x);
           continue;
         }
       }
     }
-    phase = Clock::now();
-
-    // Full Newton steps near a KKT point; halve while the step makes the violation or the KKT
-    // residual worse (the polish is local: a step that keeps failing means the active set or the
-    // starting point is not good enough, and the augmented Lagrangian carries on).
-    bool accepted = false;
-    for (double alpha = 1; alpha >= 0.125 && !accepted; alpha /= 2) {
-      vars.plus(x, alpha * d.head(n));
-      t0 = Clock::now();
-      const bool finite = evaluator.evaluate(&trial, true);
-      result.jacobianSeconds += secondsSince(t0);
-      if (!finite) continue;
-      const Vec yTrial = y + alpha * (d.tail(m) - y);
-      const Vec gt = raw::transposeTimes(trial.jacobian, objective, raw::selectValues(trial.values, objective));
-      const Vec ct = raw::selectValues(trial.values, constraint);
-      const double kktTrial = (gt + raw::transposeTimes(trial.jacobian, constraint, yTrial)).lpNorm<Eigen::Infinity>() / std::max(1.0, gt.lpNorm<Eigen::Infinity>());
-      // Only the held rows judge the step: an inequality it violates is held at the next step.
-      const double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;
-      accepted = std::max(kktTrial, violTrial) < std::max(kkt, heldViolation);
-      if (accepted)
-        for (int i = 0; i < m; ++i) multipliers[constraint[i]] = yTrial[i];
-    }
-    result.lineSearchSeconds += secondsSince(phase);
-    if (!accepted) return giveUp("a Newton step did not reduce the KKT residual");
-    x = vars.save();
-    rows.values.swap(trial.values);  // O(1): Eigen's swaps exchange the storage
-    rows.jacobian.swap(trial.jacobian);
+    if (!lineSearch(d.head(n), constraint, y, d.tail(m), std::max(kkt, heldViolation)))
+      return giveUp("a Newton step did not reduce the KKT residual");
   }
 }
 

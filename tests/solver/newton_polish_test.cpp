@@ -197,10 +197,11 @@ WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimePro
 // re-solved warm. Moved 2 cm, Newton steps from the old solution and multipliers reach the moved
 // scene's optimum nearest the old one without a single Levenberg-Marquardt iteration - the one
 // the augmented Lagrangian's own steps reach from there without the polish (29.8242; a cold solve
-// may find another: 28.9088); moved 10 cm they cannot, and the augmented Lagrangian restarts its
-// penalty (844 LM iterations with the old one, 240 restarted), to a result at least as good as
-// a cold solve's (33.81 against the cold 34.93: the head grazes the floor at the landing, and
-// the cold solve settles on another local optimum).
+// may find another: 28.9088). Moved 10 cm, the steps whose active set a program settles at every
+// step (PolishOptions::settleActiveSet) land on the cold solve's optimum (34.93), also without an
+// LM iteration; steps that found the set a row at a time failed, and the augmented Lagrangian's
+// restarted penalty found another (33.81, 108 LM iterations: the head grazes the floor at the
+// landing, and the problem has several local optima there).
 TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
   const Solved before = solvedShipped("luxo_jump.json");
   ASSERT_TRUE(before.problem);
@@ -213,15 +214,15 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
     const SolverSummary &w = r.w, &c = r.c;
     ASSERT_TRUE(w.converged && (small || c.converged)) << w.reason << " / " << c.reason;
     EXPECT_TRUE(w.polished);
+    EXPECT_EQ(w.iterations, 0);
+    // The active set moves with the landing: the first Newton step on the old optimum's held
+    // rows crosses rows it does not hold, and a quadratic program settles the new active set
+    // (PolishOptions::settleActiveSet), whose solution is the step - 3 KKT solves at 2 cm, where
+    // holding each crossed row as a step violated it took 11 and 8 changes of the active set.
+    EXPECT_GT(w.qpSeconds, 0);
+    EXPECT_GT(w.newtonSolves, 0);
     if (small) {
-      EXPECT_EQ(w.iterations, 0);
-      // The active set moves with the landing: the first Newton step on the old optimum's held
-      // rows crosses rows it does not hold, and a quadratic program settles the new active set
-      // (PolishOptions::settleActiveSet) before the steps go on - 4 KKT solves, where holding
-      // each crossed row as a step violated it took 11 and 8 changes of the active set.
-      EXPECT_GT(w.qpSeconds, 0);
-      EXPECT_GT(w.newtonSolves, 0);
-      EXPECT_LE(w.newtonSolves, 4);
+      EXPECT_LE(w.newtonSolves, 3);
       std::string error;
       auto leastSquares = SpacetimeProblem::build(r.warm->scene(), &error);
       ASSERT_TRUE(leastSquares) << error;
@@ -234,8 +235,7 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
       EXPECT_GT(lm.iterations, 0);
       EXPECT_NEAR(w.objective / lm.objective, 1.0, 1e-6) << w.objective << " vs " << lm.objective;
     } else {
-      EXPECT_LT(w.iterations, 600);
-      EXPECT_LE(w.objective, c.objective * (1 + 1e-6)) << w.objective << " vs " << c.objective;
+      EXPECT_NEAR(w.objective / c.objective, 1.0, 1e-6) << w.objective << " vs " << c.objective;
     }
     EXPECT_LE(w.maxViolation, options.tolerance);  // the moved end pose included
     const ValidityReport v = checkValidity(*r.warm);

@@ -18,8 +18,8 @@
 // section 3.1), and d regularises the constraint block so that redundant rows factorise.
 //
 // The active set starts as the inequalities whose multiplier estimate lambda + rho g is
-// positive (with PolishOptions::settleActiveSet, a quadratic program settles it where the
-// first step does not fit it). An inequality a step violates is held from then on; one the
+// positive (with PolishOptions::settleActiveSet, a quadratic program settles it at every step
+// the Newton step on it does not fit). An inequality a step violates is held from then on; one the
 // polish added is released when its multiplier pulls (y < 0); the rows held from the start are
 // released only at a KKT point of the held rows (where a contact force vanishes, the friction
 // cone's sides and the normal force reach zero together and their multipliers are not unique
@@ -46,16 +46,18 @@ struct PolishOptions {
   double tolerance = 1e-7;     // largest constraint row at the end (as SolverOptions::tolerance)
   double kktTolerance = 1e-8;  // |J_r^T r + A^T y|_inf relative to max(1, |J_r^T r|_inf)
   int threads = 1;
-  // Where the first Newton step crosses an inequality that is not held, or a held one's
-  // multiplier pulls, settle the active set by one quadratic program (the step's model with the
+  // Where a Newton step crosses an inequality that is not held, or a held one's multiplier
+  // pulls, settle the active set by one quadratic program (the step's model with the
   // inequalities near their bound linearised as inequalities, from the held rows as its guess)
-  // instead of finding it a step at a time. For a warm start after an edit, whose held rows are
-  // the old optimum's: the rows the edit makes active or inactive are found by the program's
-  // active-set steps, not by Newton steps that violate them first (the jump's end pose moved
-  // 2 cm: 4 passes and 4 KKT solves instead of 18 and 11). The program's active set is that of
-  // the linearised rows: after a large edit the steps from it can fail where those finding the
-  // set a row at a time succeed (the 3D lamp's end pose moved 10 cm: 54 rows crossed), so a
-  // caller whose settled polish fails polishes once more without it.
+  // and take its solution as the step, instead of finding the set a step at a time; every
+  // inequality, held or not, then judges the line search. For a warm start after an edit, whose
+  // held rows are the old optimum's: the rows the edit makes active or inactive are found by
+  // the program's active-set steps, not by Newton steps that violate them first (the jump's end
+  // pose moved 2 cm: 3 passes and 3 KKT solves instead of 18 and 11; 10 cm: 15 and 10, where
+  // the row-at-a-time steps failed). The program's active set is that of the linearised rows:
+  // after a large edit the steps from it can fail where those finding the set a row at a time
+  // succeed (the 3D lamp's end pose moved 10 cm: 54 rows crossed), so a caller whose settled
+  // polish fails polishes once more without it.
   bool settleActiveSet = false;
   // Wall-clock deadline (the solve's maxSeconds): checked before every Newton step; past it the
   // polish restores its starting point and stops.
@@ -77,7 +79,7 @@ struct PolishResult {
   double factorisationSeconds = 0;  // K assembled, LDL^T (with inertia correction), solves
   double lineSearchSeconds = 0;     // the trial points, their evaluations included
   double programSeconds = 0;        // the quadratic program settling the active set
-  bool settledActiveSet = false;    // that program changed the held rows
+  bool settledActiveSet = false;    // a program changed the held rows
 };
 
 // Polishes the problem's current variables with the multiplier estimates of its
