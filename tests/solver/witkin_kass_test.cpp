@@ -74,6 +74,25 @@ TEST(WitkinKass, LuxoJumpIteratesMeetTheConstraintsAndEndAtTheSqpOptimum) {
   EXPECT_NEAR(s.objective, sqp.objective, 1e-4 * sqp.objective);
 }
 
+// The heavy lamp: the projected steps end near the optimum, and the hand-over's warm polish
+// (PolishOptions::settleActiveSet) finishes it with no Levenberg-Marquardt iteration, at the
+// optimum `sqp` and IPOPT reach (110.2928; test Sqp.TheHeavyLamp...). A polish whose line search
+// cut every step that violated a row it did not hold, with those rows' Jacobians left zero (its
+// second step crossed one by 0.075 unseen), failed and left it to the augmented Lagrangian: 194
+// iterations.
+TEST(WitkinKass, TheHeavyLampsHandOverEndsInItsPolish) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_heavy.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  const SolverSummary s = solveSpacetime(*problem, witkinKass());
+  ASSERT_TRUE(s.converged) << s.reason;
+  EXPECT_TRUE(s.polished) << s.reason;
+  EXPECT_EQ(s.iterations, 0) << s.reason;
+  EXPECT_NEAR(s.objective, 110.2928, 1e-3) << s.reason;
+  for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
+    EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
+}
+
 // Stopped at its first projected step (the editor's Stop), the method keeps that restored motion:
 // within 1e-6 of every constraint, reported as cancelled.
 TEST(WitkinKass, AStopKeepsTheLastRestoredMotion) {

@@ -49,15 +49,15 @@ struct PolishOptions {
   // Where a Newton step crosses an inequality that is not held, or a held one's multiplier
   // pulls, settle the active set by one quadratic program (the step's model with the
   // inequalities near their bound linearised as inequalities, from the held rows as its guess)
-  // and take its solution as the step, instead of finding the set a step at a time; every
-  // inequality, held or not, then judges the line search. For a warm start after an edit, whose
-  // held rows are the old optimum's: the rows the edit makes active or inactive are found by
-  // the program's active-set steps, not by Newton steps that violate them first (the jump's end
-  // pose moved 2 cm: 3 passes and 3 KKT solves instead of 18 and 11; 10 cm: 15 and 10, where
-  // the row-at-a-time steps failed). The program's active set is that of the linearised rows:
-  // after a large edit the steps from it can fail where those finding the set a row at a time
-  // succeed (the 3D lamp's end pose moved 10 cm: 54 rows crossed), so a caller whose settled
-  // polish fails polishes once more without it.
+  // and take its solution as the step, instead of finding the set a step at a time; the rows
+  // near their bound keep their Jacobians for it. For a warm start after an edit, whose held
+  // rows are the old optimum's: the rows the edit makes active or inactive are found by the
+  // program's active-set steps, not by Newton steps that violate them first (the jump's end pose
+  // moved 2 cm: 3 passes and 3 KKT solves instead of 18 and 11; 10 cm: 7 and 6, where the
+  // row-at-a-time steps failed). The program's active set is that of the linearised rows: after
+  // a large edit the steps from it can fail where those finding the set a row at a time succeed
+  // (the 3D lamp's end pose moved 10 cm: 54 rows crossed), so a caller whose settled polish
+  // fails polishes once more without it.
   bool settleActiveSet = false;
   // Wall-clock deadline (the solve's maxSeconds): checked before every Newton step; past it the
   // polish restores its starting point and stops.
