@@ -26,18 +26,20 @@ using raw::Triplets;
 using raw::Variables;
 using raw::Vec;
 
-// The quadratic program that settles the held rows (PolishOptions::settleActiveSet) where the
-// first Newton step on them does not fit: min 1/2 d^T W d + g^T d on the linearised equalities
-// and the inequalities within kMargin of their bound or held (rows its step crosses join, and it
-// is solved again), by the active-set steps from the held rows (quadratic_program.h: one
+// The quadratic program that settles the held rows (PolishOptions::settleActiveSet) where a
+// Newton step on them does not fit: min 1/2 d^T W d + g^T d on the linearised equalities and the
+// inequalities within kMargin of their bound or held (rows its step crosses join, and it is
+// solved again), by the active-set steps from the held rows (quadratic_program.h: one
 // factorisation, then a solve per change of the working set).
 // Writes the program's active rows into `held` (rows it makes active into `added` too), its
-// multipliers into `multipliers` and its solution, the SQP step on its active set, into `step`;
-// true if that changed the held rows. A program that does not converge changes nothing: the
-// Newton steps find the active set as without it.
-bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const Triplets& hessian, const Vec& grad,
-                     const Vec& metric, double tolerance, std::vector<char>* held, std::vector<char>* added, Vec* multipliers,
-                     Vec* step) {
+// multipliers into `multipliers` and its solution, the SQP step on its active set, into `step`.
+// A program those steps cannot solve from the held rows (QpOptions::guessOnly: more than 80 held
+// near their bound - the 3D lamp's 700-row programs, whose interior-point solves took 0.3-0.5 s
+// each and whose steps then failed - or the steps fail) changes nothing.
+enum class Settled { Unchanged, Changed, Unsolved };
+Settled settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const Triplets& hessian, const Vec& grad,
+                        const Vec& metric, double tolerance, std::vector<char>* held, std::vector<char>* added,
+                        Vec* multipliers, Vec* step) {
   const int n = static_cast<int>(grad.size());
   const raw::RowKinds kinds(evaluator);
   const std::vector<int>&equality = kinds.equality, &inequality = kinds.inequality;
@@ -61,9 +63,10 @@ bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const T
     program.inequalities = raw::selectRows(rows.jacobian, programRows);
     program.inequalityBounds = -raw::selectValues(rows.values, programRows);
     QpOptions programOptions;
+    programOptions.guessOnly = true;
     for (int row : programRows) programOptions.activeGuess.push_back((*held)[row]);
     const QpResult qp = solveQuadraticProgram(program, programOptions, &workspace);
-    if (!qp.converged) return false;
+    if (!qp.converged) return Settled::Unsolved;
     if (raw::holdCrossedRows(g + C * qp.x, &near)) continue;
     bool changed = false;
     for (size_t i = 0; i < programRows.size(); ++i) {
@@ -77,9 +80,9 @@ bool settleActiveSet(const RawEvaluator& evaluator, const RawRows& rows, const T
     }
     for (size_t i = 0; i < equality.size(); ++i) (*multipliers)[equality[i]] = qp.y[static_cast<Eigen::Index>(i)];
     *step = qp.x;
-    return changed;
+    return changed ? Settled::Changed : Settled::Unchanged;
   }
-  return false;
+  return Settled::Unsolved;
 }
 
 }  // namespace
@@ -154,11 +157,13 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // linearise and each step's fit is checked against (with their Jacobians zero, a step after
   // the first looked as if it crossed no row: the heavy lamp's hand-over from witkin-kass
   // crossed one by 0.075, and the polish failed).
-  const double jacobianBelow = options.settleActiveSet ? -raw::kMargin : options.tolerance;
+  // Whether programs settle the active set: from the options, until one cannot be solved from
+  // the held rows, after which the polish finds the set a row at a time.
+  bool settling = options.settleActiveSet;
   auto limitJacobiansToHeld = [&] {
     std::vector<char> needed(rowCount, 1);
     for (int row = 0; row < rowCount; ++row) needed[row] = evaluator.kind(row) != RowKind::Inequality || held[row];
-    evaluator.limitJacobians(needed, jacobianBelow);
+    evaluator.limitJacobians(needed, settling ? -raw::kMargin : options.tolerance);
   };
   // Steps from x along dx with the held rows' multipliers moving from yFrom to yTo (both in the
   // order of `constraint`): full steps near a KKT point, halved while the step makes the
@@ -319,7 +324,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     result.factorisationSeconds += secondsSince(phase);
     if (!d.allFinite()) return giveUp("the Newton step is not finite");
     ++result.solves;
-    if (options.settleActiveSet) {
+    if (settling) {
       // The step on the held rows is the program's solution when it crosses no other
       // inequality and every held one pushes; otherwise the program settles the held rows.
       const Vec linear = rows.values + rows.jacobian * d.head(n);
@@ -333,21 +338,22 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
         t.resize(hessianEnd);
         const Vec before = multipliers;
         Vec programStep;
-        const bool changed = settleActiveSet(evaluator, rows, t, grad, raw::shiftMetric(problem, vars), options.tolerance,
-                                             &held, &added, &multipliers, &programStep);
+        const Settled settled = settleActiveSet(evaluator, rows, t, grad, raw::shiftMetric(problem, vars),
+                                                options.tolerance, &held, &added, &multipliers, &programStep);
         result.programSeconds += secondsSince(phase);
-        result.settledActiveSet = result.settledActiveSet || changed;
-        if (changed) {
+        result.settledActiveSet = result.settledActiveSet || settled == Settled::Changed;
+        settling = settled != Settled::Unsolved;
+        if (settled == Settled::Changed) {
           // The program's solution is the SQP step on its active set (W's weights the held rows'
           // old multipliers, N&W eq. 18.11): taken as the step, it saves the Newton step on the
           // new rows that repeated it. Where it is not accepted the polish steps on from x with
           // the program's rows and multipliers.
           analysed = false;
           limitJacobiansToHeld();
-          std::vector<int> settled;
+          std::vector<int> now;
           for (int row = 0; row < rowCount; ++row)
-            if (held[row]) settled.push_back(row);
-          if (!lineSearch(programStep, settled, raw::selectValues(before, settled), raw::selectValues(multipliers, settled),
+            if (held[row]) now.push_back(row);
+          if (!lineSearch(programStep, now, raw::selectValues(before, now), raw::selectValues(multipliers, now),
                           std::max(kkt, heldViolation)))
             vars.load(x);
           continue;

@@ -84,6 +84,11 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
   if (options.activeGuess.size() == static_cast<size_t>(mi) &&
       qp::solveFromActiveGuess(qp, H, options, system, dualScale, primalScale, &result))
     return result;
+  if (options.guessOnly && !options.activeGuess.empty()) {
+    result = QpResult();
+    result.reason = "the active-set steps from the guess could not finish";
+    return result;
+  }
   system.resetShift();  // the interior point finds its own
   Vec x = Vec::Zero(n), y = Vec::Zero(me), z = Vec::Ones(mi), s = Vec::Ones(mi);
 

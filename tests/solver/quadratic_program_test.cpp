@@ -70,6 +70,31 @@ TEST(QuadraticProgram, ProjectsOntoTheSimplexAsTheSortingAlgorithmDoes) {
   EXPECT_LT(r.iterations, 30);
 }
 
+// A guess the active-set steps cannot start from (more than their 80 rows: every one of the
+// simplex's 100 bounds) goes to the interior point, which finds the projection; with guessOnly
+// the solve stops unsolved instead and says why (the warm Newton polish then finds the active
+// set its own way, cheaper than a solve from scratch).
+TEST(QuadraticProgram, AGuessOnlySolveStopsWhereTheStepsCannotStart) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0, 1);
+  const int n = 100;
+  Vec p(n);
+  for (int i = 0; i < n; ++i) p[i] = 0.3 * normal(rng);
+  const QuadraticProgram qp = program(Mat::Identity(n, n), -p, Mat::Ones(1, n), Vec::Ones(1), -Mat::Identity(n, n), Vec::Zero(n));
+  QpOptions options;
+  options.activeGuess.assign(n, 1);
+  options.guessOnly = true;
+  const QpResult stopped = solveQuadraticProgram(qp, options);
+  EXPECT_FALSE(stopped.converged);
+  EXPECT_FALSE(stopped.reason.empty());
+  options.guessOnly = false;
+  options.tolerance = 1e-12;
+  const QpResult r = solveQuadraticProgram(qp, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_FALSE(r.fromGuess);
+  EXPECT_LT((r.x - simplexProjection(p)).lpNorm<Eigen::Infinity>(), 1e-10);
+}
+
 // The minimiser by enumeration: for every subset of inequalities held as equalities, the KKT
 // point of the equality-constrained program; the feasible one with pushing multipliers and the
 // lowest objective.

@@ -54,10 +54,12 @@ struct PolishOptions {
   // rows are the old optimum's: the rows the edit makes active or inactive are found by the
   // program's active-set steps, not by Newton steps that violate them first (the jump's end pose
   // moved 2 cm: 3 passes and 3 KKT solves instead of 18 and 11; 10 cm: 7 and 6, where the
-  // row-at-a-time steps failed). The program's active set is that of the linearised rows: after
-  // a large edit the steps from it can fail where those finding the set a row at a time succeed
-  // (the 3D lamp's end pose moved 10 cm: 54 rows crossed), so a caller whose settled polish
-  // fails polishes once more without it.
+  // row-at-a-time steps failed). A program the active-set steps cannot solve from the held rows
+  // (more than 80 of them near their bound: the 3D lamp's) ends the settling, and the polish
+  // goes on finding the set a row at a time. The program's active set is that of the
+  // linearised rows: after a large edit the steps from it can fail where those finding the set
+  // a row at a time succeed, so a caller whose settled polish fails polishes once more without
+  // it.
   bool settleActiveSet = false;
   // Wall-clock deadline (the solve's maxSeconds): checked before every Newton step; past it the
   // polish restores its starting point and stops.

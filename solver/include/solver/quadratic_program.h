@@ -65,6 +65,9 @@ struct QpOptions {
   double primalRegularisation = 1e-10, dualRegularisation = 1e-9;
   // Rows guessed active (one entry per inequality row, nonzero = active); empty: no guess.
   std::vector<char> activeGuess;
+  // With a guess: where its active-set steps cannot finish, stop unsolved instead of solving by
+  // the interior point (a caller that has a cheaper way on than a solve from scratch).
+  bool guessOnly = false;
 };
 
 struct QpResult {
