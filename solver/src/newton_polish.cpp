@@ -150,16 +150,16 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // the Jacobian's storage: a new one copied the pattern, and assigning it to `rows` copied it
   // again (Eigen's sparse matrices have no move assignment).
   RawRows trial;
-  // The steps need the Jacobians of the objective rows, the equalities and the held rows, and of
-  // any inequality a trial point violates (it is held next): the other inequalities' blocks, most
-  // of the problem's, are evaluated without their Jets in the line search. Where programs settle
-  // the active set, also those of the rows within kMargin of their bound, which the programs
-  // linearise and each step's fit is checked against (with their Jacobians zero, a step after
-  // the first looked as if it crossed no row: the heavy lamp's hand-over from witkin-kass
-  // crossed one by 0.075, and the polish failed).
   // Whether programs settle the active set: from the options, until one cannot be solved from
   // the held rows, after which the polish finds the set a row at a time.
   bool settling = options.settleActiveSet;
+  // The steps need the Jacobians of the objective rows, the equalities and the held rows, and of
+  // any inequality a trial point violates (it is held next): the other inequalities' blocks, most
+  // of the problem's, are evaluated without their Jets in the line search. While programs settle
+  // the active set, also those of the rows within kMargin of their bound, which the programs
+  // linearise and each step's fit is checked against (with their Jacobians zero, the steps after
+  // the first crossed rows unseen: the jump's end pose moved 10 cm, the polish failed and the
+  // augmented Lagrangian took 108 iterations).
   auto limitJacobiansToHeld = [&] {
     std::vector<char> needed(rowCount, 1);
     for (int row = 0; row < rowCount; ++row) needed[row] = evaluator.kind(row) != RowKind::Inequality || held[row];
