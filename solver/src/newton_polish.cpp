@@ -153,6 +153,12 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // Whether programs settle the active set: from the options, until one cannot be solved from
   // the held rows, after which the polish finds the set a row at a time.
   bool settling = options.settleActiveSet;
+  auto heldRows = [&] {
+    std::vector<int> out;
+    for (int row = 0; row < rowCount; ++row)
+      if (held[row]) out.push_back(row);
+    return out;
+  };
   // The steps need the Jacobians of the objective rows, the equalities and the held rows, and of
   // any inequality a trial point violates (it is held next): the other inequalities' blocks, most
   // of the problem's, are evaluated without their Jets in the line search. While programs settle
@@ -202,9 +208,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     return accepted;
   };
   for (int it = 0;; ++it) {
-    std::vector<int> constraint;
-    for (int r = 0; r < rowCount; ++r)
-      if (held[r]) constraint.push_back(r);
+    const std::vector<int> constraint = heldRows();
     const int m = static_cast<int>(constraint.size());
     const Vec y = raw::selectValues(multipliers, constraint);
     const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, constraint);
@@ -350,9 +354,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
           // the program's rows and multipliers.
           analysed = false;
           limitJacobiansToHeld();
-          std::vector<int> now;
-          for (int row = 0; row < rowCount; ++row)
-            if (held[row]) now.push_back(row);
+          const std::vector<int> now = heldRows();
           if (!lineSearch(programStep, now, raw::selectValues(before, now), raw::selectValues(multipliers, now),
                           std::max(kkt, heldViolation)))
             vars.load(x);

@@ -81,10 +81,9 @@ QpResult solveQuadraticProgram(const QuadraticProgram& qp, const QpOptions& opti
     ws.pattern_->signature = std::move(signature);
   }
   ReducedSystem system(qp, options, *ws.pattern_);
-  if (options.activeGuess.size() == static_cast<size_t>(mi) &&
-      qp::solveFromActiveGuess(qp, H, options, system, dualScale, primalScale, &result))
-    return result;
-  if (options.guessOnly && !options.activeGuess.empty()) {
+  const bool guessed = options.activeGuess.size() == static_cast<size_t>(mi);
+  if (guessed && qp::solveFromActiveGuess(qp, H, options, system, dualScale, primalScale, &result)) return result;
+  if (guessed && options.guessOnly) {
     result = QpResult();
     result.reason = "the active-set steps from the guess could not finish";
     return result;

@@ -49,14 +49,23 @@ Vec simplexProjection(const Vec& p) {
   return (p.array() - theta).cwiseMax(0.0);
 }
 
-TEST(QuadraticProgram, ProjectsOntoTheSimplexAsTheSortingAlgorithmDoes) {
-  std::mt19937 rng(7);
+// A point of n normally distributed coordinates (standard deviation 0.3), and the program of its
+// projection onto the simplex: min 1/2 |x - p|^2 = 1/2 x.x - p.x + const, sum x = 1, -x <= 0.
+Vec randomPoint(int n, unsigned seed) {
+  std::mt19937 rng(seed);
   std::normal_distribution<double> normal(0, 1);
-  const int n = 60;
   Vec p(n);
   for (int i = 0; i < n; ++i) p[i] = 0.3 * normal(rng);
-  // min 1/2 |x - p|^2 = 1/2 x.x - p.x + const, sum x = 1, -x <= 0.
-  const QuadraticProgram qp = program(Mat::Identity(n, n), -p, Mat::Ones(1, n), Vec::Ones(1), -Mat::Identity(n, n), Vec::Zero(n));
+  return p;
+}
+QuadraticProgram simplexProjectionProgram(const Vec& p) {
+  const Eigen::Index n = p.size();
+  return program(Mat::Identity(n, n), -p, Mat::Ones(1, n), Vec::Ones(1), -Mat::Identity(n, n), Vec::Zero(n));
+}
+
+TEST(QuadraticProgram, ProjectsOntoTheSimplexAsTheSortingAlgorithmDoes) {
+  const Vec p = randomPoint(60, 7);
+  const QuadraticProgram qp = simplexProjectionProgram(p);
   // A bound whose multiplier is nearly zero sits at x = mu / z: at the default tolerance (mean
   // complementarity 1e-9) one coordinate was 1.3e-6 off; at 1e-12, 1e-13.
   QpOptions options;
@@ -75,12 +84,9 @@ TEST(QuadraticProgram, ProjectsOntoTheSimplexAsTheSortingAlgorithmDoes) {
 // the solve stops unsolved instead and says why (the warm Newton polish then finds the active
 // set its own way, cheaper than a solve from scratch).
 TEST(QuadraticProgram, AGuessOnlySolveStopsWhereTheStepsCannotStart) {
-  std::mt19937 rng(11);
-  std::normal_distribution<double> normal(0, 1);
   const int n = 100;
-  Vec p(n);
-  for (int i = 0; i < n; ++i) p[i] = 0.3 * normal(rng);
-  const QuadraticProgram qp = program(Mat::Identity(n, n), -p, Mat::Ones(1, n), Vec::Ones(1), -Mat::Identity(n, n), Vec::Zero(n));
+  const Vec p = randomPoint(n, 11);
+  const QuadraticProgram qp = simplexProjectionProgram(p);
   QpOptions options;
   options.activeGuess.assign(n, 1);
   options.guessOnly = true;
