@@ -235,7 +235,7 @@ int run(int argc, char** argv) {
   }
   if (start) {
     const StoredSolution& s = *start->solution;
-    const SpacetimeProblem::WarmStart how = problem->warmStartFrom(*start, {s.variables, s.multipliers, s.rho});
+    const SpacetimeProblem::WarmStart how = problem->warmStartFrom(*start, {s.variables, s.multipliers, s.rho, nullptr});
     options.warmStart = how != SpacetimeProblem::WarmStart::None;
     if (!quiet)
       std::fprintf(stderr, "starting from %s%s: %s\n", initPath.empty() ? "the scene's stored solution" : initPath.c_str(),

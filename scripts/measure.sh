@@ -202,6 +202,8 @@ for b in rows:
         newton = f"{b['newton_ms_per_step']:.1f}"
         if "newton_hessian_ms" in b:
             newton += f" ({b['newton_hessian_ms']:.1f}, {b['newton_factorisation_ms']:.1f}, {b['newton_line_search_ms']:.1f})"
+    if b.get("chord_steps"):  # a warm polish's steps on the factorisation kept from the last optimum
+        steps += f" ({b['chord_steps']:.0f} on the kept factorisation)"
     if "transcriptions" in b:
         steps += f", {b['transcriptions']:.0f} transcription(s)"
     print(f"| {name} | {when} | {steps} | {lm} | {newton} | {conv} |")

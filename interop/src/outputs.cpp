@@ -36,6 +36,7 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
   j["outer_iterations"] = s.outerIterations;
   j["newton_steps"] = s.newtonSteps;
   j["newton_solves"] = s.newtonSolves;  // KKT systems solved; newton_steps counts active-set changes too
+  j["chord_steps"] = s.chordSteps;  // steps on the factorisation kept from the warm start's optimum
   j["sqp_steps"] = s.sqpSteps;  // method sqp: its quadratic programs (0: did not run)
   j["sqp_seconds"] = s.sqpSeconds;
   j["qp_seconds"] = s.qpSeconds;

@@ -312,6 +312,7 @@ void interiorPointAfterStall(SpacetimeProblem& problem, const SolverOptions& opt
 void addPolishTo(const PolishResult& result, SolverSummary* summary) {
   summary->newtonSteps += result.iterations;
   summary->newtonSolves += result.solves;
+  summary->chordSteps += result.chordSteps;
   summary->jacobianSeconds += result.jacobianSeconds;
   summary->polishSeconds += result.seconds;
   summary->polishEvaluationSeconds += result.jacobianSeconds;

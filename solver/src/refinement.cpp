@@ -153,6 +153,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     total.outerIterations += summary.outerIterations;
     total.newtonSteps += summary.newtonSteps;
     total.newtonSolves += summary.newtonSolves;
+    total.chordSteps += summary.chordSteps;
     total.sqpSteps += summary.sqpSteps;
     total.sqpSeconds += summary.sqpSeconds;
     total.qpSeconds += summary.qpSeconds;
@@ -229,6 +230,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
   best.summary.outerIterations = total.outerIterations;
   best.summary.newtonSteps = total.newtonSteps;
   best.summary.newtonSolves = total.newtonSolves;
+  best.summary.chordSteps = total.chordSteps;
   best.summary.sqpSteps = total.sqpSteps;
   best.summary.sqpSeconds = total.sqpSeconds;
   best.summary.qpSeconds = total.qpSeconds;

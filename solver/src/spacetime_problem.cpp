@@ -1377,9 +1377,10 @@ int SpacetimeProblem::initializeFrom(const MotionSource& previous) {
         for (int k = 0; k < ct.forceDims; ++k) x_[ct.impulseOffset + static_cast<int>(p) * ct.forceDims + k] = impulses[p][k];
     }
   }
-  // Multipliers do not transfer (their rows differ).
+  // Multipliers do not transfer (their rows differ), nor their KKT factorisation.
   settleHeldStances(&x_);
   std::fill(al_.lambda.begin(), al_.lambda.end(), 0.0);
+  al_.newtonFactors.reset();
   return matched;
 }
 
@@ -1394,7 +1395,7 @@ SpacetimeProblem::WarmStart SpacetimeProblem::warmStartFrom(const Scene& source,
 }
 
 SolutionState SpacetimeProblem::state() const {
-  SolutionState s{x_, al_.lambda, al_.rho};
+  SolutionState s{x_, al_.lambda, al_.rho, al_.newtonFactors};
   settleHeldStances(&s.variables);
   return s;
 }
@@ -1406,6 +1407,7 @@ bool SpacetimeProblem::restore(const SolutionState& s) {
   settleHeldStances(&x_);
   al_.lambda = s.multipliers;
   if (s.rho > 0) al_.rho = s.rho;
+  al_.newtonFactors = s.newtonFactors;
   return true;
 }
 

@@ -42,6 +42,7 @@ void reportSteps(benchmark::State& state, const SolverSummary& s) {
   state.counters["lm_iterations"] = s.iterations;
   state.counters["newton_steps"] = s.newtonSteps;
   state.counters["newton_solves"] = s.newtonSolves;
+  if (s.chordSteps > 0) state.counters["chord_steps"] = s.chordSteps;
   const double lmSeconds = s.solveSeconds - s.polishSeconds;
   if (s.iterations > 0) {
     state.counters["lm_ms_per_iteration"] = 1e3 * lmSeconds / s.iterations;
@@ -98,13 +99,14 @@ void BM_Solve(benchmark::State& state, const std::string& name, int samplesPerSe
 // (the same structure, so SpacetimeProblem::restore). Timed: the warm re-solve only. With
 // `method` the first solve and the warm one both use that method (its own optimum is edited).
 void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02,
-                        SolverMethod method = SolverMethod::AugmentedLagrangian) {
+                        SolverMethod method = SolverMethod::AugmentedLagrangian, int threads = 1) {
   Scene scene = testing::shippedScene("luxo_jump.json");
   std::string error;
   auto first = SpacetimeProblem::build(scene, &error);
   SolverOptions options = solverOptionsFor(scene.solver);
   options.newtonPolish = polish;
   options.method = method;
+  options.threads = threads;
   solveSpacetime(*first, options);
   const SolutionState solved = first->state();
   for (TermSpec& t : scene.terms)
@@ -207,6 +209,8 @@ BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm, true, 0.10)->Unit(benchmar
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_without_polish, false, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_sqp, true, 0.02, SolverMethod::Sqp)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_sqp, true, 0.10, SolverMethod::Sqp)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_2_threads, true, 0.02, SolverMethod::AugmentedLagrangian, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_2_threads, true, 0.10, SolverMethod::AugmentedLagrangian, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 // Two threads, as spacetime-cli solves (the single-threaded rows above are the editor's).
 BENCHMARK_CAPTURE(BM_Solve, luxo_hurdle_2_threads, std::string("luxo_hurdle.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_3d_2_threads, std::string("luxo_3d.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

@@ -167,13 +167,15 @@ Solved solvedShipped(const std::string& name, bool bodiesAboveGround = true) {
 }
 
 // `original` with its end pose's base_x moved by `move`, solved warm from `before` (its solution
-// and multipliers) and, with `solveCold`, cold; the warm problem is kept for further checks.
+// and multipliers, and with `keptFactorisation` the KKT factorisation its polish kept) and, with
+// `solveCold`, cold; the warm problem is kept for further checks.
 struct WarmAndCold {
   std::unique_ptr<SpacetimeProblem> warm;
   SolverSummary w, c;
 };
 WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimeProblem& before, double move,
-                                       const SolverOptions& options, bool solveCold = true) {
+                                       const SolverOptions& options, bool solveCold = true,
+                                       bool keptFactorisation = true) {
   Scene scene = original;
   for (TermSpec& t : scene.terms)
     if (t.id == "end_pose")
@@ -185,7 +187,9 @@ WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimePro
   auto cold = SpacetimeProblem::build(scene, &error);
   EXPECT_TRUE(out.warm && cold) << error;
   if (!out.warm || !cold) return out;
-  EXPECT_TRUE(out.warm->restore(before.state()));
+  SolutionState start = before.state();
+  if (!keptFactorisation) start.newtonFactors.reset();
+  EXPECT_TRUE(out.warm->restore(start));
   SolverOptions warmOptions = options;
   warmOptions.warmStart = true;
   out.w = solveSpacetime(*out.warm, warmOptions);
@@ -194,7 +198,8 @@ WarmAndCold resolveWithTheEndPoseMoved(const Scene& original, const SpacetimePro
 }
 
 // The editor's path while an animator drags: the jump solved, its end pose moved further,
-// re-solved warm. Moved 2 cm, Newton steps from the old solution and multipliers reach the moved
+// re-solved warm - here without the factorisation the first solve's polish kept (the next test
+// steps on it). Moved 2 cm, Newton steps from the old solution and multipliers reach the moved
 // scene's optimum nearest the old one without a single Levenberg-Marquardt iteration - the one
 // the augmented Lagrangian's own steps reach from there without the polish (29.8242; a cold solve
 // may find another: 28.9088). Moved 10 cm, the steps whose active set a program settles at every
@@ -209,7 +214,7 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
   for (const double move : {0.02, 0.10}) {
     SCOPED_TRACE(move);
     const bool small = move < 0.05;  // compared with the least-squares steps, not a cold solve
-    const WarmAndCold r = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options, !small);
+    const WarmAndCold r = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options, !small, false);
     ASSERT_TRUE(r.warm);
     const SolverSummary &w = r.w, &c = r.c;
     ASSERT_TRUE(w.converged && (small || c.converged)) << w.reason << " / " << c.reason;
@@ -240,6 +245,44 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
     EXPECT_LE(w.maxViolation, options.tolerance);  // the moved end pose included
     const ValidityReport v = checkValidity(*r.warm);
     for (const ValidityCheck& check : validityChecklist(v)) EXPECT_TRUE(check.pass) << check.name << ": " << check.value;
+  }
+}
+
+// The same edits with the factorisation the first solve's polish kept (chord_steps.h): moved
+// 2 cm, steps on it alone - one evaluation and back-solves each, no Hessian, no factorisation,
+// no quadratic program - reach the optimum the full Newton steps reach, the active set changed
+// on the way (four clearance rows join, a row leaves) by the bordered system. Moved 10 cm the
+// kept matrix no longer describes the problem: the first step's program does not settle, and
+// the full Newton steps land on the cold solve's optimum as without it.
+TEST(NewtonPolish, AnEditStepsOnTheKeptFactorisation) {
+  const Solved before = solvedShipped("luxo_jump.json");
+  ASSERT_TRUE(before.problem);
+  ASSERT_TRUE(before.problem->state().newtonFactors);  // the cold solve's polish kept its own
+  const SolverOptions& options = before.options;
+  for (const double move : {0.02, 0.10}) {
+    SCOPED_TRACE(move);
+    const bool small = move < 0.05;
+    const WarmAndCold kept = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options, false, true);
+    const WarmAndCold full = resolveWithTheEndPoseMoved(before.scene, *before.problem, move, options, false, false);
+    ASSERT_TRUE(kept.warm && full.warm);
+    const SolverSummary &w = kept.w, &f = full.w;
+    ASSERT_TRUE(w.converged && f.converged) << w.reason << " / " << f.reason;
+    EXPECT_TRUE(w.polished);
+    EXPECT_EQ(w.iterations, 0);
+    if (small) {
+      EXPECT_EQ(w.newtonSolves, 0);
+      EXPECT_EQ(w.qpSeconds, 0);
+      EXPECT_GT(w.chordSteps, 0);
+      EXPECT_LE(w.chordSteps, 8);
+    } else {
+      EXPECT_GT(w.newtonSolves, 0);
+    }
+    EXPECT_NEAR(w.objective / f.objective, 1.0, 1e-7) << w.objective << " vs " << f.objective;
+    EXPECT_LE(w.maxViolation, options.tolerance);
+    const ValidityReport v = checkValidity(*kept.warm);
+    for (const ValidityCheck& check : validityChecklist(v)) EXPECT_TRUE(check.pass) << check.name << ": " << check.value;
+    // The factorisation travels with the solution: the next edit finds one.
+    EXPECT_TRUE(kept.warm->state().newtonFactors);
   }
 }
 

@@ -131,7 +131,7 @@ TEST(SpeedLimit, ValidityMeasuresTheJumpsWhip) {
   auto judged = SpacetimeProblem::build(scene, &error);
   ASSERT_TRUE(judged) << error;
   // The same variables; the speed rows bring multipliers of their own.
-  ASSERT_TRUE(judged->restore({whip->state().variables, judged->state().multipliers, 0}));
+  ASSERT_TRUE(judged->restore({whip->state().variables, judged->state().multipliers, 0, nullptr}));
   const ValidityReport v = checkValidity(*judged);
   ASSERT_TRUE(v.hasSpeedLimits);
   EXPECT_EQ(v.worstJointSpeed, "luxo.j2");

@@ -26,7 +26,7 @@ std::string problemKey(const Scene& scene) {
 std::shared_ptr<const SolvedMotion> restoredMotion(const Scene& scene, const StoredSolution& stored) {
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
-  if (!problem || !problem->restore({stored.variables, stored.multipliers, stored.rho})) return nullptr;
+  if (!problem || !problem->restore({stored.variables, stored.multipliers, stored.rho, nullptr})) return nullptr;
   auto m = sampleMotion(*problem);
   m->solved = true;
   m->validity = std::make_shared<const ValidityReport>(checkValidity(*problem));

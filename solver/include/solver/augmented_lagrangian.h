@@ -160,6 +160,8 @@ struct SolverSummary {
   // steps and active-set changes) and the KKT systems it solved (the steps' cost).
   int newtonSteps = 0;
   int newtonSolves = 0;
+  // Of a warm polish: steps on the factorisation kept with the multipliers (chord_steps.h).
+  int chordSteps = 0;
   int sqpSteps = 0;             // SolverMethod::Sqp, WitkinKass: their steps (quadratic programs)
   double sqpSeconds = 0;        // the time of those steps, their polish and restorations included
   double qpSeconds = 0;         // of which in the quadratic programs (and the polish's, settling its active set)

@@ -81,6 +81,10 @@ struct PolishResult {
   double factorisationSeconds = 0;  // K assembled, LDL^T (with inertia correction), solves
   double lineSearchSeconds = 0;     // the trial points, their evaluations included
   double programSeconds = 0;        // the quadratic program settling the active set
+  // Steps on the factorisation kept from an earlier optimum (chord_steps.h) before the Newton
+  // steps: each one evaluation and back-solves. Counted whether they converged or not.
+  int chordSteps = 0;
+  double chordSeconds = 0;
   bool settledActiveSet = false;    // a program changed the held rows
 };
 

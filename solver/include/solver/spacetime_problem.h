@@ -223,6 +223,9 @@ struct SolutionState {
   std::vector<double> variables;
   std::vector<double> multipliers;
   double rho = 0;
+  // The KKT factorisation at these multipliers' optimum (AugmentedLagrangianState::newtonFactors),
+  // shared, never written to a file.
+  std::shared_ptr<const NewtonFactors> newtonFactors;
 };
 
 class SpacetimeProblem {

@@ -26,6 +26,8 @@
 
 namespace spacetime {
 
+struct NewtonFactors;  // solver/src/chord_steps.h
+
 // Penalty and multipliers shared by all residuals of one problem.
 struct AugmentedLagrangianState {
   double rho = 10;
@@ -42,6 +44,10 @@ struct AugmentedLagrangianState {
   std::vector<char> rawNeeded;
   double rawUnneededBelow = 0;
   std::vector<double> lambda;  // one per row of every residual (objective rows unused)
+  // The Newton polish's KKT factorisation where it last ended at a KKT point with these
+  // multipliers (solver/src/chord_steps.h): a warm start after an edit steps on it. Null when
+  // none; it travels with the multipliers in SolutionState.
+  std::shared_ptr<const NewtonFactors> newtonFactors;
 };
 
 // A sparse linear map z = B p, kept as its nonzeros: each input is a few spline basis weights

@@ -1,0 +1,254 @@
+// Newton steps on a kept factorisation (see chord_steps.h).
+#include "chord_steps.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "program_steps.h"
+
+namespace spacetime::raw {
+namespace {
+
+// A step makes progress when the residual max(stationarity, violation) falls below this share of
+// the best before it; this many steps in a row without progress end the steps. A row joining or
+// leaving the held set costs a step its progress at most once.
+constexpr double kProgress = 0.5;
+constexpr int kStepsWithoutProgress = 2;
+// Past this many steps the full Newton steps are cheaper: at a rate of 1/2 a factorisation
+// (the jump's: 7 ms with its Hessian) costs about as much as three of these steps.
+constexpr int kMaxSteps = 12;
+// Active-set changes of one step's program (each a back-solve or none).
+constexpr int kMaxChanges = 25;
+
+// A row outside the factorised block K: an inequality the steps hold (`release` false: its
+// Jacobian row b where it joined, column [b; 0]) or one of K's rows they release (column
+// e_{n+p}: the bordered equation fixes its multiplier's change, the border's unknown frees the
+// row's own equation). `solved` is K^-1 column, one back-solve when the border is made.
+struct Border {
+  int row = 0;
+  bool release = false;
+  std::vector<std::pair<int, double>> column;  // its nonzeros
+  Vec solved;
+  double dot(const Vec& w) const {
+    double sum = 0;
+    for (const auto& [i, value] : column) sum += value * w[i];
+    return sum;
+  }
+  Vec dense(int size) const {
+    Vec c = Vec::Zero(size);
+    for (const auto& [i, value] : column) c[i] = value;
+    return c;
+  }
+};
+
+}  // namespace
+
+ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, const Variables& vars,
+                       const std::vector<int>& objective, const PolishOptions& options,
+                       const std::atomic<bool>* cancel, RawRows* rows, std::vector<char>* held,
+                       std::vector<char>* added, Vec* multipliers) {
+  ChordResult result;
+  const double tolerance = options.tolerance, kktTolerance = options.kktTolerance;
+  const int n = factors.variables, rowCount = evaluator.rows();
+  const std::vector<int>& inK = factors.constraint;
+  const int m = static_cast<int>(inK.size()), size = n + m;
+  const double dc = factors.constraintRegularisation;
+  std::vector<int> position(static_cast<size_t>(rowCount), -1);  // each row's place among K's rows
+  for (int p = 0; p < m; ++p) position[static_cast<size_t>(inK[static_cast<size_t>(p)])] = p;
+  auto isInequality = [&](int row) { return evaluator.kind(row) == RowKind::Inequality; };
+
+  std::vector<Border> borders;
+  auto holdRow = [&](int row) {
+    const int p = position[static_cast<size_t>(row)];
+    if (p >= 0) {  // back into K: its release border goes
+      borders.erase(std::remove_if(borders.begin(), borders.end(), [&](const Border& b) { return b.row == row; }),
+                    borders.end());
+      return;
+    }
+    Border b{row, false, {}, Vec()};
+    for (SpRow::InnerIterator e(rows->jacobian, row); e; ++e) b.column.emplace_back(static_cast<int>(e.col()), e.value());
+    b.solved = factors.ldlt.solve(b.dense(size));
+    borders.push_back(std::move(b));
+  };
+  auto releaseRow = [&](int row) {
+    const int p = position[static_cast<size_t>(row)];
+    if (p < 0) {  // held by a border: the border goes
+      borders.erase(std::remove_if(borders.begin(), borders.end(), [&](const Border& b) { return b.row == row; }),
+                    borders.end());
+      return;
+    }
+    Border b{row, true, {{n + p, 1.0}}, Vec()};
+    b.solved = factors.ldlt.solve(b.dense(size));
+    borders.push_back(std::move(b));
+  };
+  for (int row = 0; row < rowCount; ++row) {
+    if (evaluator.kind(row) == RowKind::Objective) continue;
+    const bool inBlock = position[static_cast<size_t>(row)] >= 0;
+    if ((*held)[row] && !inBlock) holdRow(row);
+    if (!(*held)[row] && inBlock) releaseRow(row);
+  }
+
+  // The bordered system [K B; B^T D] [u; v] = [f; h] by the Schur complement of K,
+  // S = D - B^T K^-1 B (D: -dc for held rows, 0 for released ones): u = K^-1 f - K^-1 B v.
+  // h: the held borders' values negated, the released rows' multipliers negated (to zero).
+  auto solveBordered = [&](const Vec& u0, Vec* v) {
+    Vec u = u0;
+    const int k = static_cast<int>(borders.size());
+    v->resize(k);
+    if (k == 0) return u;
+    Eigen::MatrixXd S(k, k);
+    Vec h(k);
+    for (int i = 0; i < k; ++i) {
+      const Border& b = borders[static_cast<size_t>(i)];
+      for (int j = 0; j < k; ++j) S(i, j) = -b.dot(borders[static_cast<size_t>(j)].solved);
+      if (!b.release) S(i, i) -= dc;
+      h[i] = (b.release ? -(*multipliers)[b.row] : -rows->values[b.row]) - b.dot(u);
+    }
+    *v = S.partialPivLu().solve(h);
+    for (int j = 0; j < k; ++j) u -= (*v)[j] * borders[static_cast<size_t>(j)].solved;
+    return u;
+  };
+
+  std::vector<char> needed(static_cast<size_t>(rowCount));
+  // Rows that left the held set once (each may leave once: a degenerate contact's cone sides
+  // and normal force, whose multipliers are not unique, would otherwise leave and join in turn).
+  std::vector<char> left(static_cast<size_t>(rowCount), 0);
+  double best = std::numeric_limits<double>::infinity();
+  int withoutProgress = 0;
+  for (int step = 0;; ++step) {
+    std::vector<int> constraint;  // the held rows
+    for (int row = 0; row < rowCount; ++row)
+      if ((*held)[row]) constraint.push_back(row);
+    const Vec y = selectValues(*multipliers, constraint);
+    const Vec grad = transposeTimes(rows->jacobian, objective, selectValues(rows->values, objective));
+    const Vec gradient = grad + transposeTimes(rows->jacobian, constraint, y);  // of the Lagrangian
+    const double kkt = gradient.lpNorm<Eigen::Infinity>() / std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+    double violation = 0;
+    for (int row = 0; row < rowCount; ++row) {
+      if (evaluator.kind(row) == RowKind::Objective) continue;
+      const double v = rows->values[row];
+      violation = std::max(violation, (*held)[row] ? std::abs(v) : (isInequality(row) ? v : 0.0));
+    }
+    result.residual = std::max(kkt, violation);
+    if (step == 0) result.startResidual = result.residual;
+    if (!(std::max(kkt, violation) < 1e300)) {
+      result.reason = "the residual is not finite";
+      return result;
+    }
+    if (kkt <= kktTolerance && violation <= tolerance) {
+      // A KKT point of the held rows: those that pull are released (newton_polish.h's rule).
+      const double pull = -1e-6 * std::max(1.0, y.size() ? y.lpNorm<Eigen::Infinity>() : 0.0);
+      bool released = false;
+      for (size_t i = 0; i < constraint.size(); ++i) {
+        const int row = constraint[i];
+        if (isInequality(row) && y[static_cast<Eigen::Index>(i)] < pull) {
+          (*held)[row] = 0;
+          (*multipliers)[row] = 0;
+          releaseRow(row);
+          released = true;
+        }
+      }
+      if (!released) {
+        result.converged = true;
+        result.reason = "KKT conditions met";
+        return result;
+      }
+      // Another problem from here (the released rows' multipliers leave the gradient, evaluated
+      // again above): its residual is judged afresh.
+      best = std::numeric_limits<double>::infinity();
+      withoutProgress = 0;
+      continue;
+    }
+    if (result.residual < kProgress * best) {
+      withoutProgress = 0;
+    } else if (++withoutProgress >= kStepsWithoutProgress) {
+      result.reason = "the residual stopped falling";
+      return result;
+    }
+    best = std::min(best, result.residual);
+    if (step >= kMaxSteps) {
+      result.reason = "no KKT point within " + std::to_string(kMaxSteps) + " steps";
+      return result;
+    }
+    if ((cancel && cancel->load()) || Clock::now() > options.deadline) {
+      result.reason = "cancelled or out of time";
+      return result;
+    }
+    // The step: the quadratic program of the kept matrix (its equalities the held rows, its
+    // inequalities every other inequality linearised) solved by active-set changes on the
+    // borders, a back-solve per row joining or leaving: a held inequality whose multiplier would
+    // pull leaves (the most pulling first, each row once), its multiplier leaving the gradient
+    // of the Lagrangian with it; then a row the step would violate joins (the most violated
+    // first).
+    Vec f(size);
+    f.head(n) = -gradient;
+    for (int p = 0; p < m; ++p) f[n + p] = -rows->values[inK[static_cast<size_t>(p)]];
+    Vec u, v, u0 = factors.ldlt.solve(f);  // K^-1 f, again when f changes
+    bool settled = false;
+    for (int change = 0; change < kMaxChanges && !settled; ++change) {
+      u = solveBordered(u0, &v);
+      // The multipliers after the step: K's held rows', the held borders'.
+      const double pull = -1e-6 * std::max(1.0, multipliers->lpNorm<Eigen::Infinity>());
+      int leaving = -1;
+      double most = pull;
+      for (int p = 0; p < m; ++p) {
+        const int row = inK[static_cast<size_t>(p)];
+        const double y = (*multipliers)[row] + u[n + p];
+        if (isInequality(row) && (*held)[row] && !left[static_cast<size_t>(row)] && y < most) leaving = row, most = y;
+      }
+      for (size_t j = 0; j < borders.size(); ++j) {
+        const Border& b = borders[j];
+        const double y = (*multipliers)[b.row] + v[static_cast<Eigen::Index>(j)];
+        if (!b.release && !left[static_cast<size_t>(b.row)] && y < most) leaving = b.row, most = y;
+      }
+      if (leaving >= 0) {
+        for (SpRow::InnerIterator e(rows->jacobian, leaving); e; ++e) f[e.col()] += (*multipliers)[leaving] * e.value();
+        (*held)[leaving] = 0;
+        (*multipliers)[leaving] = 0;
+        left[static_cast<size_t>(leaving)] = 1;
+        releaseRow(leaving);
+        u0 = factors.ldlt.solve(f);
+        continue;
+      }
+      const Vec linear = rows->values + rows->jacobian * u.head(n);
+      int joining = -1;
+      double worst = tolerance;
+      for (int row = 0; row < rowCount; ++row)
+        if (isInequality(row) && !(*held)[row] && linear[row] > worst) joining = row, worst = linear[row];
+      if (joining < 0) {
+        settled = true;
+        break;
+      }
+      (*held)[joining] = (*added)[joining] = 1;
+      (*multipliers)[joining] = 0;
+      holdRow(joining);
+    }
+    if (!settled) {
+      result.reason = "the steps' program did not settle within " + std::to_string(kMaxChanges) + " changes";
+      return result;
+    }
+    if (!u.allFinite() || !v.allFinite()) {
+      result.reason = "the step is not finite";
+      return result;
+    }
+    vars.plus(vars.save(), u.head(n));
+    for (int p = 0; p < m; ++p) {
+      const int row = inK[static_cast<size_t>(p)];
+      (*multipliers)[row] = (*held)[row] ? (*multipliers)[row] + u[n + p] : 0.0;
+    }
+    for (size_t j = 0; j < borders.size(); ++j)
+      if (!borders[j].release) (*multipliers)[borders[j].row] += v[static_cast<Eigen::Index>(j)];
+    for (int row = 0; row < rowCount; ++row) needed[static_cast<size_t>(row)] = !isInequality(row) || (*held)[row];
+    evaluator.limitJacobians(needed, -kMargin);  // the programs linearise the rows near their bound
+    ++result.steps;
+    if (!evaluator.evaluate(rows, true)) {
+      result.reason = "a row is not finite";
+      return result;
+    }
+  }
+}
+
+}  // namespace spacetime::raw

@@ -1,0 +1,77 @@
+// Newton steps on a kept factorisation: the Newton polish's KKT matrix at the last optimum,
+// factorised once, reused for the steps after an edit of the task.
+//
+// An edit that moves a target (a pin, the end pose) changes the rows' values and not their
+// derivatives: at the old optimum the new problem's KKT matrix is the old one, and the first
+// Newton step on it is the tangential predictor of parametric optimisation. The steps after it
+// keep the matrix and evaluate only the rows and their Jacobians at each point: the right-hand
+// side is the true KKT residual (the gradient of the Lagrangian with the current Jacobian, the
+// rows' values), so their fixed points are the new problem's KKT points, and the fixed matrix
+// only sets the rate (a chord method, as the real-time iterations of optimal control reuse a
+// factorisation across sampling times: Diehl, Bock and Schloeder 2005). The rate is the matrix's
+// error times the distance: on the jump's end pose moved 2 cm, the residual falls 10-40 times a
+// step.
+//
+// An edit can change the active set. Rows outside the factorised block join it as a border (the
+// Schur complement of the factorised block, one back-solve per bordered row, with the row's
+// Jacobian where it joined), and a held row leaves it by a border that fixes its multiplier at
+// zero and frees its equation. Each step solves the quadratic program of the kept matrix - the
+// held rows as equalities, every other inequality linearised - by such changes: a row the step
+// would violate joins (the most violated first), a held row whose multiplier would pull leaves
+// (the most pulling first; each row once, as a degenerate contact's cone sides and normal force
+// would otherwise leave and join in turn). At a KKT point of the held rows those that pull are
+// released, as the polish does. These are the active-set steps of quadratic_program.h on a
+// factorisation kept from another point.
+//
+// The steps stop as soon as the residual stops falling fast (a large edit, a new active set
+// the old matrix does not describe, the rounding floor of a matrix of another point): the
+// caller then takes full Newton steps, which factorise the matrix at the current point, from
+// where the steps stopped or from its start.
+#pragma once
+
+#include <Eigen/SparseCholesky>
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "raw_rows.h"
+#include "solver/newton_polish.h"
+
+namespace spacetime {
+
+// The KKT matrix K = [W A^T; A -dc I] of a polish's last Newton step (newton_polish.cpp), its
+// LDL^T, and the rows A holds, in K's order. Kept with the multipliers
+// (AugmentedLagrangianState::newtonFactors), so a warm start from the solution finds it.
+struct NewtonFactors {
+  int variables = 0, rows = 0;  // the problem's tangent size and its row count
+  std::vector<int> constraint;  // K's constraint rows (problem rows), in order
+  double constraintRegularisation = 0;  // dc
+  Eigen::SimplicialLDLT<raw::SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+};
+
+namespace raw {
+
+struct ChordResult {
+  bool converged = false;  // at a KKT point of the held rows with every held inequality pushing
+  int steps = 0;           // steps taken (each one evaluation of the rows and Jacobians)
+  // max(stationarity, violation) where the steps started and where they stopped
+  double startResidual = 0, residual = 0;
+  std::string reason;
+};
+
+// Steps on `factors` from the current variables (their rows `rows`, evaluated with the Jacobians
+// of the rows held), the rows `held` (per row) and their `multipliers` (per row), towards a KKT
+// point of min 1/2 |objective rows|^2 subject to the held rows at zero (newton_polish.h), to
+// the options' tolerance on the rows and kktTolerance on the stationarity relative to
+// max(1, |J_r^T r|); they stop at the options' deadline and when `cancel` is set.
+// Rows the steps hold join `held` and `added`. On success the variables, `rows`, `held` and
+// `multipliers` describe the KKT point; otherwise they are where the steps stopped, and the
+// caller restores what it needs.
+ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, const Variables& vars,
+                       const std::vector<int>& objective, const PolishOptions& options,
+                       const std::atomic<bool>* cancel, RawRows* rows, std::vector<char>* held,
+                       std::vector<char>* added, Vec* multipliers);
+
+}  // namespace raw
+}  // namespace spacetime
