@@ -251,7 +251,7 @@ TEST(NewtonPolish, WarmStartAfterAnEditLandsOnTheNearestOptimum) {
 // The same edits with the factorisation the first solve's polish kept (chord_steps.h): moved
 // 2 cm, steps on it alone - one evaluation and back-solves each, no Hessian, no factorisation,
 // no quadratic program - reach the optimum the full Newton steps reach, the active set changed
-// on the way (four clearance rows join, a row leaves) by the bordered system. Moved 10 cm the
+// on the way (four inequality rows join, a held row leaves) by the bordered system. Moved 10 cm the
 // kept matrix no longer describes the problem: the first step's program does not settle, and
 // the full Newton steps land on the cold solve's optimum as without it.
 TEST(NewtonPolish, AnEditStepsOnTheKeptFactorisation) {
