@@ -61,13 +61,13 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
   auto isInequality = [&](int row) { return evaluator.kind(row) == RowKind::Inequality; };
 
   std::vector<Border> borders;
+  auto dropBorder = [&](int row) {
+    borders.erase(std::remove_if(borders.begin(), borders.end(), [&](const Border& b) { return b.row == row; }),
+                  borders.end());
+  };
   auto holdRow = [&](int row) {
     const int p = position[static_cast<size_t>(row)];
-    if (p >= 0) {  // back into K: its release border goes
-      borders.erase(std::remove_if(borders.begin(), borders.end(), [&](const Border& b) { return b.row == row; }),
-                    borders.end());
-      return;
-    }
+    if (p >= 0) return dropBorder(row);  // back into K: its release border goes
     Border b{row, false, {}, Vec()};
     for (SpRow::InnerIterator e(rows->jacobian, row); e; ++e) b.column.emplace_back(static_cast<int>(e.col()), e.value());
     b.solved = factors.ldlt.solve(b.dense(size));
@@ -75,11 +75,7 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
   };
   auto releaseRow = [&](int row) {
     const int p = position[static_cast<size_t>(row)];
-    if (p < 0) {  // held by a border: the border goes
-      borders.erase(std::remove_if(borders.begin(), borders.end(), [&](const Border& b) { return b.row == row; }),
-                    borders.end());
-      return;
-    }
+    if (p < 0) return dropBorder(row);  // held by a border: the border goes
     Border b{row, true, {{n + p, 1.0}}, Vec()};
     b.solved = factors.ldlt.solve(b.dense(size));
     borders.push_back(std::move(b));
@@ -112,7 +108,6 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
     return u;
   };
 
-  std::vector<char> needed(static_cast<size_t>(rowCount));
   // Rows that left the held set once (each may leave once: a degenerate contact's cone sides
   // and normal force, whose multipliers are not unique, would otherwise leave and join in turn).
   std::vector<char> left(static_cast<size_t>(rowCount), 0);
@@ -241,8 +236,7 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
     }
     for (size_t j = 0; j < borders.size(); ++j)
       if (!borders[j].release) (*multipliers)[borders[j].row] += v[static_cast<Eigen::Index>(j)];
-    for (int row = 0; row < rowCount; ++row) needed[static_cast<size_t>(row)] = !isInequality(row) || (*held)[row];
-    evaluator.limitJacobians(needed, -kMargin);  // the programs linearise the rows near their bound
+    limitJacobiansToHeld(evaluator, *held, -kMargin);  // the programs linearise the rows near their bound
     ++result.steps;
     if (!evaluator.evaluate(rows, true)) {
       result.reason = "a row is not finite";

@@ -184,9 +184,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // the first crossed rows unseen: the jump's end pose moved 10 cm, the polish failed and the
   // augmented Lagrangian took 108 iterations).
   auto limitJacobiansToHeld = [&] {
-    std::vector<char> needed(rowCount, 1);
-    for (int row = 0; row < rowCount; ++row) needed[row] = evaluator.kind(row) != RowKind::Inequality || held[row];
-    evaluator.limitJacobians(needed, settling ? -raw::kMargin : options.tolerance);
+    raw::limitJacobiansToHeld(evaluator, held, settling ? -raw::kMargin : options.tolerance);
   };
   // Steps from x along dx with the held rows' multipliers moving from yFrom to yTo (both in the
   // order of `constraint`): full steps near a KKT point, halved while the step makes the

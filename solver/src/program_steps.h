@@ -35,6 +35,16 @@ constexpr double kCrossed = 1e-9;
 constexpr double kMargin = 0.05;
 constexpr int kMaxRounds = 10;
 
+// From now on `evaluator` computes the Jacobians of the objective rows, the equalities, the
+// inequalities `held` (one entry per row) and any row above `below` (RawEvaluator::limitJacobians):
+// what the Newton-type steps on the held rows read.
+inline void limitJacobiansToHeld(RawEvaluator& evaluator, const std::vector<char>& held, double below) {
+  std::vector<char> needed(held.size());
+  for (size_t row = 0; row < held.size(); ++row)
+    needed[row] = evaluator.kind(static_cast<int>(row)) != RowKind::Inequality || held[row];
+  evaluator.limitJacobians(needed, below);
+}
+
 // The inequalities a step's program left out that its step crosses (linearised values
 // `linear`, one per inequality) join `held` (indices into the inequalities, kept sorted);
 // true if any did.

@@ -209,9 +209,9 @@ BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm, true, 0.10)->Unit(benchmar
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_without_polish, false, 0.10)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_sqp, true, 0.02, SolverMethod::Sqp)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_sqp, true, 0.10, SolverMethod::Sqp)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+// Two threads, as spacetime-cli solves (the single-threaded rows above are the editor's).
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_2cm_2_threads, true, 0.02, SolverMethod::AugmentedLagrangian, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoWarmResolve, end_moved_10cm_2_threads, true, 0.10, SolverMethod::AugmentedLagrangian, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
-// Two threads, as spacetime-cli solves (the single-threaded rows above are the editor's).
 BENCHMARK_CAPTURE(BM_Solve, luxo_hurdle_2_threads, std::string("luxo_hurdle.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_3d_2_threads, std::string("luxo_3d.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Solve, luxo_power_formula_2_threads, std::string("luxo_power_formula.json"), 0, true, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
