@@ -182,6 +182,16 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
     f.head(n) = -gradient;
     for (int p = 0; p < m; ++p) f[n + p] = -rows->values[inK[static_cast<size_t>(p)]];
     Vec u, v, u0 = factors.ldlt.solve(f);  // K^-1 f, again when f changes
+    // The inequalities that may join: those not held, with a Jacobian row evaluated (the others'
+    // linearised value is their value). Linearising only these, not every row of J at every
+    // change, was half of the steps' own work on the 2 cm edit.
+    std::vector<int> joinable;
+    for (int row = 0; row < rowCount; ++row) {
+      if (!isInequality(row) || (*held)[row]) continue;
+      const double* begin = rows->jacobian.valuePtr() + rows->jacobian.outerIndexPtr()[row];
+      const double* end = rows->jacobian.valuePtr() + rows->jacobian.outerIndexPtr()[row + 1];
+      if (rows->values[row] > tolerance || std::any_of(begin, end, [](double x) { return x != 0; })) joinable.push_back(row);
+    }
     bool settled = false;
     for (int change = 0; change < kMaxChanges && !settled; ++change) {
       u = solveBordered(u0, &v);
@@ -205,14 +215,19 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
         (*multipliers)[leaving] = 0;
         left[static_cast<size_t>(leaving)] = 1;
         releaseRow(leaving);
+        joinable.push_back(leaving);
         u0 = factors.ldlt.solve(f);
         continue;
       }
-      const Vec linear = rows->values + rows->jacobian * u.head(n);
       int joining = -1;
       double worst = tolerance;
-      for (int row = 0; row < rowCount; ++row)
-        if (isInequality(row) && !(*held)[row] && linear[row] > worst) joining = row, worst = linear[row];
+      for (int row : joinable) {
+        if ((*held)[row]) continue;
+        double change = 0;
+        for (SpRow::InnerIterator e(rows->jacobian, row); e; ++e) change += e.value() * u[e.col()];
+        const double linear = rows->values[row] + change;
+        if (linear > worst) joining = row, worst = linear;
+      }
       if (joining < 0) {
         settled = true;
         break;

@@ -297,6 +297,12 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
           al.lambda[evaluator.multiplier(row)] =
               evaluator.kind(row) == RowKind::Equality ? multipliers[row] : std::max(0.0, multipliers[row]);
       result.converged = true;
+      std::vector<std::vector<double>> termRows(evaluator.terms().size());
+      for (size_t k = 0; k < termRows.size(); ++k) {
+        const double* first = rows.values.data() + evaluator.firstRow(k);
+        termRows[k].assign(first, first + evaluator.terms()[k]->num_residuals());
+      }
+      result.measures = measure(evaluator.terms(), termRows);
       if (haveFactors) {
         factors->variables = n;
         factors->rows = rowCount;

@@ -11,6 +11,7 @@
 
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <thread>
 #include <unordered_map>
@@ -194,12 +195,22 @@ class RawEvaluator {
     if (jacobian && !hasPattern(out->jacobian)) out->jacobian = pattern_;
     double* values = jacobian ? out->jacobian.valuePtr() : nullptr;
     const int parts = std::max(1, std::min<int>(threads_, static_cast<int>(terms_.size())));
+    // The threads take runs of consecutive terms as they finish the last (the terms' costs
+    // differ: the dynamics' and the clearances' alternate in time) and write their own flag
+    // once. Every other term to each thread, each writing its flag (one cache line) at every
+    // term, made two threads barely faster than one: the jump's evaluation (LuxoRawRows) took
+    // 2.8-3.3 ms on 2 threads against 3.2-4.8 ms on 1; like this 1.6-2.3 ms.
     std::vector<char> ok(parts, 1);
+    std::atomic<size_t> next{0};
     auto work = [&](int part) {
       std::vector<double> blockJacobians;
       std::vector<double*> pointers;
-      for (size_t k = part; k < terms_.size() && ok[part]; k += parts)
-        ok[part] = evaluateTerm(k, out->values.data() + firstRow_[k], values, &blockJacobians, &pointers);
+      const size_t T = terms_.size();
+      bool good = true;
+      for (size_t begin = next.fetch_add(kRun); begin < T && good; begin = next.fetch_add(kRun))
+        for (size_t k = begin; k < std::min(T, begin + kRun) && good; ++k)
+          good = evaluateTerm(k, out->values.data() + firstRow_[k], values, &blockJacobians, &pointers);
+      ok[part] = good;
     };
     std::vector<std::thread> pool;
     for (int p = 1; p < parts; ++p) pool.emplace_back(work, p);
@@ -210,12 +221,17 @@ class RawEvaluator {
     return std::all_of(ok.begin(), ok.end(), [](char c) { return c != 0; }) && out->values.allFinite();
   }
 
+  // The terms a thread of evaluate() or curvature() takes at a time.
+  static constexpr size_t kRun = 32;
+
   // Lower-triangle triplets of sum_rows w[row] grad^2 row, in the tangent columns, at the blocks'
   // current values. Residuals are split over `threads` threads.
   Triplets curvature(const Vec& w, int threads) const {
     std::vector<Triplets> parts(threads);
     auto work = [&](int part) {
-      for (size_t k = part; k < terms_.size(); k += threads) {
+      Triplets mine;  // the thread's own until it is done (see evaluate)
+      for (size_t k = 0; k < terms_.size(); ++k) {
+        if (static_cast<int>(k / kRun % threads) != part) continue;  // runs of terms in turn, in a fixed order
         const TermResidual* term = terms_[k];
         if (term->kernel().nonlinearInputs() == 0) continue;
         // Rows of weight zero (the polish's inequalities outside its active set: most of them)
@@ -227,8 +243,9 @@ class RawEvaluator {
         for (int i = 0; i < H.rows(); ++i)
           for (int j = 0; j < H.cols(); ++j)
             if (col[i] >= 0 && col[j] >= 0 && col[i] >= col[j] && H(i, j) != 0)
-              parts[part].emplace_back(col[i], col[j], H(i, j));
+              mine.emplace_back(col[i], col[j], H(i, j));
       }
+      parts[part] = std::move(mine);
     };
     std::vector<std::thread> pool;
     for (int p = 1; p < threads; ++p) pool.emplace_back(work, p);

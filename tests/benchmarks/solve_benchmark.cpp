@@ -10,6 +10,7 @@
 #include <ceres/crs_matrix.h>
 #include <ceres/problem.h>
 
+#include "../../solver/src/raw_rows.h"
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
@@ -187,6 +188,23 @@ void BM_LuxoJacobian(benchmark::State& state, bool freeLiftOff) {
   state.counters["nonzeros"] = static_cast<double>(jacobian.values.size());
 }
 
+// One evaluation of every raw row with its Jacobian (solver/src/raw_rows.h: what each step of
+// the Newton polish, the SQP and Witkin-Kass evaluates) of the jump at its default guess, on
+// `threads` threads.
+void BM_LuxoRawRows(benchmark::State& state, int threads) {
+  const Scene scene = testing::shippedScene("luxo_jump.json");
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  const raw::Variables vars(problem->ceresProblem());
+  raw::RawEvaluator evaluator(*problem, vars, threads);
+  raw::RawRows rows;
+  bool finite = true;
+  for (auto _ : state) finite = evaluator.evaluate(&rows, true) && finite;
+  state.counters["converged"] = finite ? 1 : 0;  // every row finite
+  state.counters["rows"] = static_cast<double>(rows.jacobian.rows());
+  state.counters["cols"] = static_cast<double>(rows.jacobian.cols());
+}
+
 BENCHMARK_CAPTURE(BM_Solve, particle, std::string("particle.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, particle_gravity, std::string("particle_gravity.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, luxo_jump, std::string("luxo_jump.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
@@ -234,6 +252,8 @@ BENCHMARK_CAPTURE(BM_Scaling, chain_12, std::string("luxo_chain_12.json"))->Unit
 BENCHMARK_CAPTURE(BM_Scaling, chain_15, std::string("luxo_chain_15.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, fixed_lift_off, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, free_lift_off, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_LuxoRawRows, 1_thread, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_LuxoRawRows, 2_threads, 2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace spacetime

@@ -279,6 +279,12 @@ TEST(NewtonPolish, AnEditStepsOnTheKeptFactorisation) {
     }
     EXPECT_NEAR(w.objective / f.objective, 1.0, 1e-7) << w.objective << " vs " << f.objective;
     EXPECT_LE(w.maxViolation, options.tolerance);
+    // The summary's objective and violation come from the polish's last evaluation: they are
+    // the problem's as measured afresh (the same rows, evaluated with and without Jets).
+    const ProblemMeasures now = measure(*kept.warm);
+    EXPECT_NEAR(w.objective, now.objective, 1e-12 * now.objective);
+    EXPECT_NEAR(w.maxViolation, now.maxViolation, 1e-15);
+    EXPECT_EQ(w.worstConstraint, now.worstConstraint);
     const ValidityReport v = checkValidity(*kept.warm);
     for (const ValidityCheck& check : validityChecklist(v)) EXPECT_TRUE(check.pass) << check.name << ": " << check.value;
     // The factorisation travels with the solution: the next edit finds one.

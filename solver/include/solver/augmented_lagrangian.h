@@ -12,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -201,6 +202,8 @@ struct ProblemMeasures {
   std::string worstConstraint;
 };
 ProblemMeasures measure(const SpacetimeProblem& problem);
+// The same of rows evaluated elsewhere: rows[k] holds terms[k]'s raw rows.
+ProblemMeasures measure(std::span<const TermResidual* const> terms, const std::vector<std::vector<double>>& rows);
 
 // The constraints violated by more than `floor` at the problem's current variables, largest
 // first, at most `limit`.

@@ -86,6 +86,9 @@ struct PolishResult {
   int chordSteps = 0;
   double chordSeconds = 0;
   bool settledActiveSet = false;    // a program changed the held rows
+  // The objective and violation at the KKT point, from the polish's last evaluation there (when
+  // converged; measure() of the problem would evaluate every row once more).
+  ProblemMeasures measures;
 };
 
 // Polishes the problem's current variables with the multiplier estimates of its
