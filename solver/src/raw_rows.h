@@ -338,13 +338,16 @@ class RawEvaluator {
            std::equal(J.outerIndexPtr(), J.outerIndexPtr() + J.rows() + 1, pattern_.outerIndexPtr()) &&
            std::equal(J.innerIndexPtr(), J.innerIndexPtr() + J.nonZeros(), pattern_.innerIndexPtr());
   }
-  // Term k's rows into rows, and with `values` its Jacobian into its slots of the pattern.
+  // Term k's rows into rows, and with `values` its Jacobian into its slots of the pattern: straight
+  // from the kernel's Jacobian (TermResidual::rawRowsWithJacobian), or for a moving residual
+  // through its cost function's block Jacobians.
   bool evaluateTerm(size_t k, double* rows, double* values, std::vector<double>* blockJacobians,
                     std::vector<double*>* pointers) const {
     const TermResidual& term = *terms_[k];
     const std::vector<int32_t>& sizes = term.parameter_block_sizes();
     const int m = term.num_residuals();
     if (!values) return term.Evaluate(parameters_[k].data(), rows, nullptr);
+    if (!term.moving()) return term.rawRowsWithJacobian(rows, slot_.data() + slotStart_[k], width_[k], values + valueStart_[k]);
     size_t total = 0;
     for (int size : sizes) total += static_cast<size_t>(m) * size;
     blockJacobians->resize(total);

@@ -295,4 +295,33 @@ bool TermResidual::Evaluate(double const* const* parameters, double* residuals,
   return true;
 }
 
+// Evaluate's raw-mode path (rowScale 1) with the chain rule Jz B summed straight into the
+// caller's columns, entry by entry in B's order as Evaluate sums each block entry: the block
+// Jacobians (every coordinate of every block, most of them zero) were zeroed, filled and copied
+// into these columns at every call.
+bool TermResidual::rawRowsWithJacobian(double* rows, const int* slot, int width, double* jacobian) const {
+  thread_local std::vector<double> p, z, Jz;
+  const int m = kernel_->rowCount(), nz = kernel_->inputSize();
+  p.resize(B_.cols);
+  stackInto(blocks_.data(), p.data());
+  z.resize(nz);
+  B_.apply(p.data(), z.data());
+  std::fill(jacobian, jacobian + static_cast<size_t>(m) * width, 0.0);
+  if (jacobianUnneeded(z.data(), rows)) return true;
+  Jz.resize(static_cast<size_t>(m) * nz);
+  kernel_->evaluateWithJacobian(z.data(), rows, Jz.data());
+  for (int r = 0; r < m; ++r)
+    if (!std::isfinite(rows[r])) return false;
+  for (double v : Jz)
+    if (!std::isfinite(v)) return false;
+  for (const SparseMap::Entry& e : B_.entries) {
+    const int s = slot[e.col];
+    if (s < 0) continue;
+    double* column = jacobian + s;
+    const double* zc = Jz.data() + e.row;
+    for (int r = 0; r < m; ++r) column[static_cast<size_t>(r) * width] += e.value * zc[static_cast<size_t>(r) * nz];
+  }
+  return true;
+}
+
 }  // namespace spacetime

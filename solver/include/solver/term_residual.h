@@ -116,6 +116,13 @@ class TermResidual : public ceres::CostFunction {
 
   // The kernel's raw rows at the given parameters (before the augmented-Lagrangian transform).
   void rawRows(double const* const* parameters, double* rows) const;
+  // The raw rows at the parameters' current values with their Jacobian written straight into
+  // `jacobian`, row-major m x width: stacked input i (the blocks' coordinates in order) into
+  // column slot[i], none where slot[i] < 0. The values Evaluate gives in raw mode (its block
+  // Jacobians scattered into those columns), to the bit, without the blocks: for the raw rows'
+  // evaluator (solver/src/raw_rows.h). Not for moving residuals. False if a row or a derivative
+  // is not finite.
+  bool rawRowsWithJacobian(double* rows, const int* slot, int width, double* jacobian) const;
   // The same at the parameters' current values.
   std::vector<double> rawRowsNow() const;
   // The kernel's inputs z = B p at the parameters' current values.
