@@ -120,8 +120,8 @@ class TermResidual : public ceres::CostFunction {
   // `jacobian`, row-major m x width: stacked input i (the blocks' coordinates in order) into
   // column slot[i], none where slot[i] < 0. The values Evaluate gives in raw mode (its block
   // Jacobians scattered into those columns), to the bit, without the blocks: for the raw rows'
-  // evaluator (solver/src/raw_rows.h). Not for moving residuals. False if a row or a derivative
-  // is not finite.
+  // evaluator (solver/src/raw_rows.h), which sets AugmentedLagrangianState::raw around it. Not
+  // for moving residuals. False if a row or a derivative is not finite.
   bool rawRowsWithJacobian(double* rows, const int* slot, int width, double* jacobian) const;
   // The same at the parameters' current values.
   std::vector<double> rawRowsNow() const;
