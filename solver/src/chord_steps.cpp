@@ -114,19 +114,10 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
   double best = std::numeric_limits<double>::infinity();
   int withoutProgress = 0;
   for (int step = 0;; ++step) {
-    std::vector<int> constraint;  // the held rows
-    for (int row = 0; row < rowCount; ++row)
-      if ((*held)[row]) constraint.push_back(row);
-    const Vec y = selectValues(*multipliers, constraint);
-    const Vec grad = transposeTimes(rows->jacobian, objective, selectValues(rows->values, objective));
-    const Vec gradient = grad + transposeTimes(rows->jacobian, constraint, y);  // of the Lagrangian
-    const double kkt = gradient.lpNorm<Eigen::Infinity>() / std::max(1.0, grad.lpNorm<Eigen::Infinity>());
-    double violation = 0;
-    for (int row = 0; row < rowCount; ++row) {
-      if (evaluator.kind(row) == RowKind::Objective) continue;
-      const double v = rows->values[row];
-      violation = std::max(violation, (*held)[row] ? std::abs(v) : (isInequality(row) ? v : 0.0));
-    }
+    const HeldKkt point = heldKkt(evaluator, *rows, objective, *held, *multipliers);
+    const std::vector<int>& constraint = point.constraint;
+    const Vec &y = point.y, &gradient = point.lagrangianGradient;
+    const double kkt = point.kkt, violation = point.violation;
     result.residual = std::max(kkt, violation);
     if (step == 0) result.startResidual = result.residual;
     if (!(std::max(kkt, violation) < 1e300)) {
@@ -135,11 +126,10 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
     }
     if (kkt <= kktTolerance && violation <= tolerance) {
       // A KKT point of the held rows: those that pull are released (newton_polish.h's rule).
-      const double pull = -1e-6 * std::max(1.0, y.size() ? y.lpNorm<Eigen::Infinity>() : 0.0);
       bool released = false;
       for (size_t i = 0; i < constraint.size(); ++i) {
         const int row = constraint[i];
-        if (isInequality(row) && y[static_cast<Eigen::Index>(i)] < pull) {
+        if (isInequality(row) && y[static_cast<Eigen::Index>(i)] < point.pull) {
           (*held)[row] = 0;
           (*multipliers)[row] = 0;
           releaseRow(row);

@@ -138,12 +138,6 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     held[r] = 1;
     multipliers[r] = estimate;
   }
-  auto inactiveViolation = [&](const Vec& values) {  // inequalities outside the active set
-    double worst = 0;
-    for (int r = 0; r < rowCount; ++r)
-      if (evaluator.kind(r) == RowKind::Inequality && !held[r]) worst = std::max(worst, values[r]);
-    return worst;
-  };
 
   const std::vector<double> initial = vars.save();
   std::vector<double> x = initial;
@@ -249,16 +243,13 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     }
   }
   for (int it = 0;; ++it) {
-    const std::vector<int> constraint = heldRows();
+    const raw::HeldKkt point = raw::heldKkt(evaluator, rows, objective, held, multipliers);
+    const std::vector<int>& constraint = point.constraint;
     const int m = static_cast<int>(constraint.size());
-    const Vec y = raw::selectValues(multipliers, constraint);
-    const Vec r = raw::selectValues(rows.values, objective), c = raw::selectValues(rows.values, constraint);
-    const Vec grad = raw::transposeTimes(rows.jacobian, objective, r);
-    const double kkt = (grad + raw::transposeTimes(rows.jacobian, constraint, y)).lpNorm<Eigen::Infinity>() /
-                       std::max(1.0, grad.lpNorm<Eigen::Infinity>());
-    const double heldViolation = c.size() ? c.lpNorm<Eigen::Infinity>() : 0.0;
+    const Vec &y = point.y, &r = point.r, &c = point.c, &grad = point.grad;
+    const double kkt = point.kkt, heldViolation = point.heldViolation;
     result.kktResidual = kkt;
-    result.maxViolation = std::max(heldViolation, inactiveViolation(rows.values));
+    result.maxViolation = point.violation;
     result.iterations = it;
 
     // The active set. An inequality a step violated is held from then on; one the polish added
@@ -266,7 +257,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     // point of the held rows: where a contact force vanishes the cone's sides and the normal
     // force reach zero together, their multipliers are not unique, and releasing them on the
     // way made the active set cycle (measured on luxo_jump).
-    const double pull = -1e-6 * std::max(1.0, y.lpNorm<Eigen::Infinity>());
+    const double pull = point.pull;
     const bool atKkt = kkt <= options.kktTolerance && result.maxViolation <= options.tolerance;
     bool activeSetChanged = false;
     for (int row = 0; row < rowCount; ++row)

@@ -45,6 +45,41 @@ inline void limitJacobiansToHeld(RawEvaluator& evaluator, const std::vector<char
   evaluator.limitJacobians(needed, below);
 }
 
+// The KKT residual of min 1/2 |objective rows|^2 subject to the rows `held` (one entry per row)
+// at zero, with their `multipliers` (one per row), at `rows` evaluated with the Jacobians of the
+// objective rows and the held rows: what the Newton polish (newton_polish.cpp) and its steps on
+// a kept factorisation (chord_steps.cpp) judge a point by.
+struct HeldKkt {
+  std::vector<int> constraint;  // the held rows, in order
+  Vec y;                        // their multipliers
+  Vec r, c;                     // the objective rows' values, the held rows'
+  Vec grad;                     // J_r^T r
+  Vec lagrangianGradient;       // J_r^T r + J_c^T y
+  double kkt = 0;               // |J_r^T r + J_c^T y|_inf / max(1, |J_r^T r|_inf)
+  double heldViolation = 0;     // |c|_inf
+  double violation = 0;         // the held rows' and the other inequalities' above their bound
+  double pull = 0;              // a held inequality whose multiplier is below this pulls
+};
+inline HeldKkt heldKkt(const RawEvaluator& evaluator, const RawRows& rows, const std::vector<int>& objective,
+                       const std::vector<char>& held, const Vec& multipliers) {
+  HeldKkt k;
+  for (size_t row = 0; row < held.size(); ++row)
+    if (held[row]) k.constraint.push_back(static_cast<int>(row));
+  k.y = selectValues(multipliers, k.constraint);
+  k.r = selectValues(rows.values, objective);
+  k.c = selectValues(rows.values, k.constraint);
+  k.grad = transposeTimes(rows.jacobian, objective, k.r);
+  k.lagrangianGradient = k.grad + transposeTimes(rows.jacobian, k.constraint, k.y);
+  k.kkt = k.lagrangianGradient.lpNorm<Eigen::Infinity>() / std::max(1.0, k.grad.lpNorm<Eigen::Infinity>());
+  k.heldViolation = k.c.size() ? k.c.lpNorm<Eigen::Infinity>() : 0.0;
+  k.violation = k.heldViolation;
+  for (size_t row = 0; row < held.size(); ++row)
+    if (evaluator.kind(static_cast<int>(row)) == RowKind::Inequality && !held[row])
+      k.violation = std::max(k.violation, rows.values[static_cast<Eigen::Index>(row)]);
+  k.pull = -1e-6 * std::max(1.0, k.y.size() ? k.y.lpNorm<Eigen::Infinity>() : 0.0);
+  return k;
+}
+
 // The inequalities a step's program left out that its step crosses (linearised values
 // `linear`, one per inequality) join `held` (indices into the inequalities, kept sorted);
 // true if any did.
