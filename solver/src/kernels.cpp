@@ -63,6 +63,25 @@ std::shared_ptr<const expr::Tape> inverseDynamicsTape(const std::shared_ptr<cons
   cache.push_back({model, contacts, forceDims, weighted, tape});
   return tape;
 }
+// One body's pose and spatial Jacobian at q (bodyPoseAndJacobian): its points' world positions
+// and their slopes in q, dp/dq_d = v_d + w_d x p (the body's motion per unit speed of dof d), in
+// doubles - the kinematic kernels' Jacobians without Jets along the chain.
+// One at a time per thread: the columns live in the thread's work space.
+struct BodySlopes {
+  Transform<double> X;
+  const std::vector<Motion<double>>* columns;
+  BodySlopes(const Model<double>& model, const double* q, int body) {
+    thread_local std::vector<Motion<double>> work;
+    X = bodyPoseAndJacobian(model, q, body, &work);
+    columns = &work;
+  }
+  Eigen::Vector3d position(const Eigen::Vector3d& local) const { return pointPosition(X, local); }
+  const Motion<double>& motion(int dof) const { return (*columns)[static_cast<size_t>(dof)]; }
+  Eigen::Vector3d slope(int dof, const Eigen::Vector3d& world) const {
+    const Motion<double>& m = motion(dof);
+    return m.lin + m.ang.cross(world);
+  }
+};
 }  // namespace
 
 void Kernel::weightedHessian(const double* z, const double* w, double* hessian) const {
@@ -332,6 +351,17 @@ void PinKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(PinKernel)
 
+void PinKernel::rawJacobian(const double* z, double* rows, double* jacobian) const {
+  const int n = inputs_;
+  const BodySlopes body(*model_, z, body_);
+  const Eigen::Vector3d p = body.position(point_);
+  for (size_t i = 0; i < axes_.size(); ++i) rows[i] = p[axes_[i]] - target_[axes_[i]];
+  for (int d = 0; d < n; ++d) {
+    const Eigen::Vector3d slope = body.slope(d, p);
+    for (size_t i = 0; i < axes_.size(); ++i) jacobian[i * n + d] = slope[axes_[i]];
+  }
+}
+
 // --- ContactAnchorKernel -----------------------------------------------------------------
 
 ContactAnchorKernel::ContactAnchorKernel(std::shared_ptr<const Model<double>> model,
@@ -358,6 +388,27 @@ void ContactAnchorKernel::compute(const T* z, T* rows) const {
     rows[2 * n + k] = pointPosition(X, contact_.points[heightPoints_[k]]).y() - ground_;
 }
 SPACETIME_DEFINE_EVALUATORS(ContactAnchorKernel)
+
+void ContactAnchorKernel::rawJacobian(const double* z, double* rows, double* jacobian) const {
+  const int dofs = model_->dofCount(), nz = inputs_, m = rowCount();
+  const BodySlopes body(*model_, z, contact_.body);
+  const double* anchors = z + dofs;
+  const size_t n = contact_.points.size();
+  std::fill(jacobian, jacobian + static_cast<size_t>(m) * nz, 0.0);
+  // Row r is axis `axis` of point `point` (less its anchor, input `anchor`, or the ground).
+  auto write = [&](int r, size_t point, int axis, int anchor) {
+    const Eigen::Vector3d p = body.position(contact_.points[point]);
+    rows[r] = p[axis] - (anchor >= 0 ? anchors[anchor] : ground_);
+    for (int d = 0; d < dofs; ++d) jacobian[r * nz + d] = body.slope(d, p)[axis];
+    if (anchor >= 0) jacobian[r * nz + dofs + anchor] = -1;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    write(static_cast<int>(2 * i), i, 0, static_cast<int>(2 * i));
+    write(static_cast<int>(2 * i + 1), i, 2, static_cast<int>(2 * i + 1));
+  }
+  for (size_t k = 0; k < heightPoints_.size(); ++k)
+    write(static_cast<int>(2 * n + k), static_cast<size_t>(heightPoints_[k]), 1, -1);
+}
 
 // --- ContactStillRows ---------------------------------------------------------------------
 
@@ -528,6 +579,29 @@ void ClearanceKernel::compute(const T* z, T* rows) const {
 }
 SPACETIME_DEFINE_EVALUATORS(ClearanceKernel)
 
+void ClearanceKernel::rawJacobian(const double* z, double* rows, double* jacobian) const {
+  const int n = inputs_;
+  const BodySlopes body(*model_, z, body_);
+  const Eigen::Vector3d p = body.position(point_);
+  // The row is sign * p[axis] + a constant: height - p_y, or the active face's as compute()
+  // picks it (the first strictly largest).
+  int axis = 1;
+  double sign = -1;
+  if (!box_) {
+    rows[0] = height_ - p.y();
+  } else {
+    double outside = p.x() - boxMax_.x();
+    axis = 0, sign = -1;  // rows[0] = -outside
+    for (int k = 0; k < 3; ++k) {
+      const double above = p[k] - boxMax_[k], below = boxMin_[k] - p[k];
+      if (above > outside) outside = above, axis = k, sign = -1;
+      if (below > outside) outside = below, axis = k, sign = 1;
+    }
+    rows[0] = -outside;
+  }
+  for (int d = 0; d < n; ++d) jacobian[d] = sign * body.slope(d, p)[axis];
+}
+
 // --- GroundClearanceKernel ---------------------------------------------------------------
 
 GroundClearanceKernel::GroundClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
@@ -548,6 +622,31 @@ void GroundClearanceKernel::compute(const T* z, T* rows) const {
     rows[i] = T(ground_) - features_[i].lowestHeight(rotation, X.r, kSmoothing);
 }
 SPACETIME_DEFINE_EVALUATORS(GroundClearanceKernel)
+
+void GroundClearanceKernel::rawJacobian(const double* z, double* rows, double* jacobian) const {
+  constexpr double kSmoothing = 1e-3;  // as compute()
+  const int n = inputs_;
+  const BodySlopes body(*model_, z, body_);
+  const Mat3<double> rotation = body.X.E.transpose();
+  const Eigen::Vector3d& origin = body.X.r;
+  for (size_t i = 0; i < features_.size(); ++i) {
+    const LowestPointFeature& f = features_[i];
+    rows[i] = ground_ - f.lowestHeight(rotation, origin, kSmoothing);
+    // The height's slope in a world rotation w of the body, (w x a)_y for a = R p, and in a move
+    // of its origin, e_y; a disc adds r n_y / sqrt(1 - n_y^2 + eps^2) times the slope of
+    // n_y = (R n)_y, (w x b)_y for b = R n, while 1 - n_y^2 is not clamped at 0.
+    const Eigen::Vector3d a = rotation * f.point;
+    Eigen::Vector3d slopeTurn(-a.z(), 0, a.x());
+    if (f.isDisc()) {
+      const Eigen::Vector3d b = rotation * f.discNormal;
+      const double across = 1 - b.y() * b.y();
+      if (!(across < 0)) slopeTurn += f.discRadius * b.y() / std::sqrt(across + kSmoothing * kSmoothing) * Eigen::Vector3d(-b.z(), 0, b.x());
+    }
+    // Column d: the body turns at w_d and its origin moves at v_d + w_d x origin; the row is
+    // ground - height.
+    for (int d = 0; d < n; ++d) jacobian[i * n + d] = -(slopeTurn.dot(body.motion(d).ang) + body.slope(d, origin).y());
+  }
+}
 
 // --- JointLimitKernel --------------------------------------------------------------------
 

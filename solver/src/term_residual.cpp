@@ -309,7 +309,7 @@ bool TermResidual::rawRowsWithJacobian(double* rows, const int* slot, int width,
   std::fill(jacobian, jacobian + static_cast<size_t>(m) * width, 0.0);
   if (jacobianUnneeded(z.data(), rows)) return true;
   Jz.resize(static_cast<size_t>(m) * nz);
-  kernel_->evaluateWithJacobian(z.data(), rows, Jz.data());
+  kernel_->rawJacobian(z.data(), rows, Jz.data());
   for (int r = 0; r < m; ++r)
     if (!std::isfinite(rows[r])) return false;
   for (double v : Jz)

@@ -10,12 +10,14 @@
 #include <Eigen/QR>
 
 #include <algorithm>
+#include <map>
 #include <random>
 #include <set>
 
 #include "../shipped_scene.h"
 #include "split_landing.h"
 #include "core/scene_io.h"
+#include "solver/kernels.h"
 #include "solver/spacetime_problem.h"
 
 namespace spacetime {
@@ -213,6 +215,59 @@ TEST(TermJacobianLimits, OnlyUnneededInequalityBlocksBelowTheThresholdAreSkipped
   al.rawNeeded.clear();
   EXPECT_GT(skipped, 100);
   EXPECT_GT(kept, 0);  // inequality blocks above the threshold: evaluated in full
+}
+
+// The kinematic kernels' Jacobians through the body's spatial Jacobian (bodyPoseAndJacobian:
+// ground clearances, point clearances, pins, contact anchors) are the Jets' along the chain to
+// rounding, at perturbed poses of the planar and the 3D lamp (its head a cylinder: disc rows,
+// tilted), the hurdle (a box to clear) and the humanoid (boxes and capsules, a deep tree, soles
+// of four points).
+TEST(KinematicJacobians, EqualTheJetsAlongTheChain) {
+  std::string error;
+  std::map<std::string, int> checked;
+  for (const char* name : {"luxo_jump.json", "luxo_3d.json", "luxo_hurdle.json", "humanoid_jump.json"}) {
+    Scene scene = testing::shippedScene(name);
+    if (std::string(name) == "luxo_3d.json") {  // and a pin on the 3D lamp's head, held a while
+      TermSpec pin;
+      pin.kind = TermKind::Pin;
+      pin.id = "head pin";
+      pin.character = "luxo";
+      pin.body = "head";
+      pin.time = 0.5;
+      pin.until = 0.6;
+      pin.point = Eigen::Vector3d(0.05, 0.1, -0.03);
+      pin.position = Eigen::Vector3d(0.3, 0.6, 0.1);
+      scene.terms.push_back(pin);
+    }
+    auto problem = SpacetimeProblem::build(scene, &error);
+    ASSERT_TRUE(problem) << error;
+    std::mt19937 rng(11);
+    std::normal_distribution<double> noise(0.0, 0.3);
+    for (double& x : problem->variables()) x += noise(rng);
+    for (const TermResidual* res : problem->residuals()) {
+      const Kernel& kernel = res->kernel();
+      const char* kind = dynamic_cast<const GroundClearanceKernel*>(&kernel) ? "ground clearance"
+                         : dynamic_cast<const ClearanceKernel*>(&kernel)     ? "clearance"
+                         : dynamic_cast<const PinKernel*>(&kernel)           ? "pin"
+                         : dynamic_cast<const ContactAnchorKernel*>(&kernel) ? "contact anchor"
+                                                                             : nullptr;
+      if (!kind) continue;
+      const Eigen::VectorXd z = res->inputsNow();
+      const int m = kernel.rowCount(), n = kernel.inputSize();
+      std::vector<double> rows(m), jets(m), J(m * n), Jjets(m * n);
+      kernel.rawJacobian(z.data(), rows.data(), J.data());
+      kernel.evaluateWithJacobian(z.data(), jets.data(), Jjets.data());
+      double scale = 1;
+      for (double v : Jjets) scale = std::max(scale, std::abs(v));
+      for (int r = 0; r < m; ++r) EXPECT_NEAR(rows[r], jets[r], 1e-14 * scale) << name << " " << kernel.label();
+      for (int k = 0; k < m * n; ++k) EXPECT_NEAR(J[k], Jjets[k], 1e-12 * scale) << name << " " << kernel.label() << " entry " << k;
+      ++checked[std::string(name) + ": " + kind];
+    }
+  }
+  for (const char* kind : {"luxo_jump.json: ground clearance", "luxo_3d.json: ground clearance",
+                           "humanoid_jump.json: ground clearance", "luxo_hurdle.json: clearance",
+                           "luxo_jump.json: contact anchor", "humanoid_jump.json: contact anchor", "luxo_3d.json: pin"})
+    EXPECT_GT(checked[kind], 0) << kind;
 }
 
 }  // namespace

@@ -116,6 +116,31 @@ Transform<T> bodyPose(const Model<S>& model, const T* q, int body) {
   return b.parent >= 0 ? X_parent * bodyPose(model, q, b.parent) : X_parent;
 }
 
+// bodyPose's pose of one body, and the body's spatial Jacobian in world coordinates: column d is
+// the body's spatial velocity per unit speed of dof d (zero off its chain), the motion subspace
+// S_d of the dof's body carried to world coordinates by the inverse of that body's X_world - the
+// velocity recursion v_i = v_parent + S_i qd_i of RBDA Table 5.1 unrolled along the chain, every
+// joint's S constant (Plucker coordinates at the world origin: the angular velocity and the
+// velocity of the body-fixed point at the origin). A body-fixed point at world position p then
+// moves at v + w x p per column. In doubles, for kernels that differentiate a function of one
+// body's pose through it instead of carrying Jets along the chain.
+namespace detail {
+template <class S>
+Transform<S> chainPoseAndJacobian(const Model<S>& model, const S* q, int body, std::vector<Motion<S>>* jacobian) {
+  const Body<S>& b = model.bodies[body];
+  const Transform<S> XJ = b.dofIndex >= 0 ? b.joint.template transform<S>(q[b.dofIndex]) : Transform<S>();
+  const Transform<S> X_parent = compose(XJ, b.X_tree);
+  const Transform<S> X = b.parent >= 0 ? X_parent * chainPoseAndJacobian(model, q, b.parent, jacobian) : X_parent;
+  if (b.dofIndex >= 0) (*jacobian)[b.dofIndex] = X.applyInverse(b.joint.motionSubspace());
+  return X;
+}
+}  // namespace detail
+template <class S>
+Transform<S> bodyPoseAndJacobian(const Model<S>& model, const S* q, int body, std::vector<Motion<S>>* jacobian) {
+  jacobian->assign(static_cast<size_t>(model.dofCount()), Motion<S>());
+  return detail::chainPoseAndJacobian(model, q, body, jacobian);
+}
+
 // World position of a point given in body coordinates, from the body's pose.
 template <class T, class S>
 Vec3<T> pointPosition(const Transform<T>& X, const Vec3<S>& p) {

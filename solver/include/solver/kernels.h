@@ -54,6 +54,12 @@ class Kernel {
   // Rows and their row-major Jacobian (rowCount x inputSize) with respect to z. The default
   // seeds Jets on every input; kernels with linear structure override it.
   virtual void evaluateWithJacobian(const double* z, double* rows, double* jacobian) const;
+  // The same rows and Jacobian as the raw rows' evaluator reads them (the Newton-type steps:
+  // solver/src/raw_rows.h): evaluateWithJacobian's, or where a kernel has a cheaper form equal
+  // to rounding, that. Ceres's evaluations (the augmented Lagrangian's Levenberg-Marquardt)
+  // keep evaluateWithJacobian's: their path flips with the last bit (the 3D lamp's from 360 to
+  // 720 iterations with the kinematic kernels' form below; docs/design.md).
+  virtual void rawJacobian(const double* z, double* rows, double* jacobian) const { evaluateWithJacobian(z, rows, jacobian); }
   // How many leading inputs the rows are nonlinear in; the rest enter linearly (the forces,
   // anchors and accelerations of most kernels), so second derivatives among them vanish.
   virtual int nonlinearInputs() const { return inputs_; }
@@ -158,6 +164,9 @@ class PinKernel : public Kernel {
   PinKernel(std::shared_ptr<const Model<double>> model, int body, const Eigen::Vector3d& point,
             const Eigen::Vector3d& target, std::array<bool, 3> axes, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  // Through the body's spatial Jacobian (bodyPoseAndJacobian) in doubles, as
+  // GroundClearanceKernel, instead of Jets along the chain.
+  void rawJacobian(const double* z, double* rows, double* jacobian) const override;
 
  private:
   std::shared_ptr<const Model<double>> model_;
@@ -174,6 +183,9 @@ class ContactAnchorKernel : public Kernel {
   ContactAnchorKernel(std::shared_ptr<const Model<double>> model, const ContactPoints& contact,
                       int forceDims, double groundHeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  // Through the body's spatial Jacobian (bodyPoseAndJacobian) in doubles, as
+  // GroundClearanceKernel, instead of Jets along the chain.
+  void rawJacobian(const double* z, double* rows, double* jacobian) const override;
   int nonlinearInputs() const override { return model_->dofCount(); }  // q, not anchors
 
  private:
@@ -300,6 +312,9 @@ class ClearanceKernel : public Kernel {
                   const Eigen::Vector3d& point, const Eigen::Vector3d& boxMin,
                   const Eigen::Vector3d& boxMax, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  // Through the body's spatial Jacobian (bodyPoseAndJacobian) in doubles, as
+  // GroundClearanceKernel, instead of Jets along the chain.
+  void rawJacobian(const double* z, double* rows, double* jacobian) const override;
 
  private:
   std::shared_ptr<const Model<double>> model_;
@@ -319,6 +334,10 @@ class GroundClearanceKernel : public Kernel {
   GroundClearanceKernel(std::shared_ptr<const Model<double>> model, int body,
                         std::vector<LowestPointFeature> features, double groundHeight, std::string label);
   SPACETIME_KERNEL_EVALUATORS
+  // Each row's slope in the body's pose (a small world rotation w and move of its origin),
+  // chained through the body's spatial Jacobian (bodyPoseAndJacobian), in doubles: Jets carried
+  // along the chain were a fifth of a warm edit's evaluations on the jump.
+  void rawJacobian(const double* z, double* rows, double* jacobian) const override;
 
  private:
   std::shared_ptr<const Model<double>> model_;
