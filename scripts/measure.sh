@@ -194,6 +194,8 @@ for b in rows:
             steps += f", {b['ip_ms_per_iteration']:.1f} ms each (evaluation {100 * b['ip_evaluation_share']:.0f} %, Hessian {100 * b['ip_hessian_share']:.0f} %)"
     elif "rows" in b:
         steps = f"{b['rows']:.0f} rows x {b['cols']:.0f} columns"
+    elif "residuals" in b:  # a problem's build
+        steps = f"{b['residuals']:.0f} residual blocks"
     conv = {1: "yes", 0: "no"}.get(b.get("converged", b.get("valid")), "")
     lm = newton = ""
     if b.get("lm_ms_per_iteration"):

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cassert>
+#include <charconv>
 #include <initializer_list>
 #include <cmath>
 #include <sstream>
@@ -17,10 +18,16 @@
 namespace spacetime {
 namespace {
 
+// The time as a stream writes it by default (printf's %g: six significant digits), by
+// std::to_chars: a stream per label was a fifth of a problem's build (the jump's: 10.9 of 51.0 M
+// instructions), and every edit builds one.
 std::string at(const std::string& what, double t) {
-  std::ostringstream s;
-  s << what << " t=" << t;
-  return s.str();
+  char digits[32];
+  const std::to_chars_result end = std::to_chars(digits, digits + sizeof digits, t, std::chars_format::general, 6);
+  std::string label;
+  label.reserve(what.size() + 3 + static_cast<size_t>(end.ptr - digits));
+  label.append(what).append(" t=").append(digits, end.ptr);
+  return label;
 }
 
 // A contact that begins after the clip's start and asks for an impact (the default).

@@ -68,6 +68,10 @@ TermResidual::TermResidual(std::shared_ptr<const Kernel> kernel, MovingInputs mo
 }
 
 void TermResidual::indexColumns(const std::vector<int>& sizes) {
+  size_t total = 0;
+  for (int size : sizes) total += static_cast<size_t>(size);
+  colBlock_.reserve(total);
+  colIndex_.reserve(total);
   for (size_t b = 0; b < sizes.size(); ++b)
     for (int i = 0; i < sizes[b]; ++i) {
       colBlock_.push_back(static_cast<int>(b));

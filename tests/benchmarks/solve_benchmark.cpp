@@ -205,6 +205,21 @@ void BM_LuxoRawRows(benchmark::State& state, int threads) {
   state.counters["cols"] = static_cast<double>(rows.jacobian.cols());
 }
 
+// Building the jump's problem from its scene: what every edit pays before its solve (the editor
+// and spacetime-cli build a problem per solve; LuxoWarmResolve leaves it out of its time).
+void BM_LuxoProblemBuild(benchmark::State& state) {
+  const Scene scene = testing::shippedScene("luxo_jump.json");
+  std::string error;
+  size_t residuals = 0;
+  for (auto _ : state) {
+    auto problem = SpacetimeProblem::build(scene, &error);
+    residuals = problem ? problem->residuals().size() : 0;
+  }
+  state.counters["converged"] = residuals > 0 ? 1 : 0;  // built
+  state.counters["residuals"] = static_cast<double>(residuals);
+}
+
+BENCHMARK(BM_LuxoProblemBuild)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, particle, std::string("particle.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, particle_gravity, std::string("particle_gravity.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Solve, luxo_jump, std::string("luxo_jump.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
