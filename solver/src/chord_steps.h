@@ -48,6 +48,9 @@ struct NewtonFactors {
   std::vector<int> constraint;  // K's constraint rows (problem rows), in order
   double constraintRegularisation = 0;  // dc
   Eigen::SimplicialLDLT<raw::SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  // The raw rows' layout of the polish that factorised K: the next warm polish's evaluator takes
+  // it where the problem's structure is the same (raw::RowLayout).
+  std::shared_ptr<const raw::RowLayout> layout;
 };
 
 namespace raw {

@@ -100,9 +100,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   if (!problem.freeEnds().empty()) return finish("not run: free contact ends are bounded variables");
   const Variables vars(problem.ceresProblem());
   const int threads = std::max(1, options.threads);
-  RawEvaluator evaluator(problem, vars, threads);
-  if (evaluator.anyMoving()) return finish("not run: a residual moves with a free contact end");
   AugmentedLagrangianState& al = problem.augmentedLagrangian();
+  RawEvaluator evaluator(problem, vars, threads, al.newtonFactors ? al.newtonFactors->layout : nullptr);
+  if (evaluator.anyMoving()) return finish("not run: a residual moves with a free contact end");
   const int n = vars.tangent, rowCount = evaluator.rows();
 
   RawRows rows;
@@ -299,6 +299,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
         factors->rows = rowCount;
         factors->constraint = factorisedRows;
         factors->constraintRegularisation = dc;
+        factors->layout = evaluator.layout();
         al.newtonFactors = factors;
       }
       return finish("KKT conditions met");

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <thread>
 #include <unordered_map>
 #include <vector>
@@ -136,12 +137,31 @@ struct RawRows {
   SpRow jacobian;
 };
 
+// The raw rows' Jacobian pattern and where each term's inputs land in it: term k's rows hold the
+// sorted tangent columns its blocks move (width[k] of them); stacked input i of the term lands in
+// slot slot[slotStart[k] + i] of each row (-1: a constant coordinate); a block none of whose
+// coordinates moves gets no Jacobian (blockMoves, from blockStart[k]); the term's first value in
+// the pattern is valueStart[k]. A function of the terms' row counts, block sizes and stacked
+// tangent columns alone (`key`), so a problem rebuilt after an edit of a target (the same
+// structure) has the same, and its evaluator reuses the last one's, kept with the Newton
+// factorisation (NewtonFactors::layout): building it was 70 % of constructing the jump's
+// evaluator (7.1 of 10.1 M instructions), which every warm polish pays.
+struct RowLayout {
+  std::vector<int> key;  // per term: its row count, its block count and sizes, its stacked columns
+  std::vector<int> slot, slotStart, width, blockStart, valueStart;
+  std::vector<char> blockMoves;
+  SpRow pattern;
+};
+
 class RawEvaluator {
  public:
-  RawEvaluator(SpacetimeProblem& problem, const Variables& vars, int threads)
+  // `reuse`: a layout of an earlier evaluator, taken if this problem's terms give the same key.
+  RawEvaluator(SpacetimeProblem& problem, const Variables& vars, int threads,
+               const std::shared_ptr<const RowLayout>& reuse = nullptr)
       : problem_(problem), threads_(std::max(1, threads)), tangent_(vars.tangent) {
     std::vector<ceres::ResidualBlockId> ids;
     problem.ceresProblem().GetResidualBlocks(&ids);
+    std::vector<int> key;
     for (ceres::ResidualBlockId id : ids) {
       terms_.push_back(dynamic_cast<const TermResidual*>(problem.ceresProblem().GetCostFunctionForResidualBlock(id)));
       parameters_.emplace_back(terms_.back()->blocks().begin(), terms_.back()->blocks().end());
@@ -156,9 +176,22 @@ class RawEvaluator {
         const std::vector<int>& c = vars.columns.at(b);
         col.insert(col.end(), c.begin(), c.end());
       }
+      key.push_back(terms_.back()->num_residuals());
+      key.push_back(static_cast<int>(terms_.back()->parameter_block_sizes().size()));
+      for (int size : terms_.back()->parameter_block_sizes()) key.push_back(size);
+      key.insert(key.end(), col.begin(), col.end());
     }
-    buildPattern();
+    if (reuse && reuse->key == key && reuse->pattern.cols() == tangent_) {
+      layout_ = reuse;
+    } else {
+      auto built = std::make_shared<RowLayout>();
+      built->key = std::move(key);
+      buildLayout(built.get());
+      layout_ = std::move(built);
+    }
   }
+  // The row pattern and the terms' slots in it (see RowLayout), for a later evaluator.
+  const std::shared_ptr<const RowLayout>& layout() const { return layout_; }
   int rows() const { return static_cast<int>(kind_.size()); }
   RowKind kind(int row) const { return kind_[row]; }
   int multiplier(int row) const { return multiplier_[row]; }
@@ -192,7 +225,7 @@ class RawEvaluator {
     al.rawNeeded.swap(needed_);
     al.rawUnneededBelow = neededBelow_;
     out->values.resize(rows());
-    if (jacobian && !hasPattern(out->jacobian)) out->jacobian = pattern_;
+    if (jacobian && !hasPattern(out->jacobian)) out->jacobian = layout_->pattern;
     double* values = jacobian ? out->jacobian.valuePtr() : nullptr;
     const int parts = std::max(1, std::min<int>(threads_, static_cast<int>(terms_.size())));
     // The threads take runs of consecutive terms as they finish the last (the terms' costs
@@ -270,10 +303,10 @@ class RawEvaluator {
     std::fill(g, g + gaussNewton_.nonZeros(), 0.0);
     for (size_t k = 0; k < terms_.size(); ++k) {
       if (gaussNewtonStart_[k] == gaussNewtonStart_[k + 1]) continue;  // no objective row
-      const int m = terms_[k]->num_residuals(), width = width_[k], first = firstRow_[k];
+      const int m = terms_[k]->num_residuals(), width = layout_->width[k], first = firstRow_[k];
       for (int r = 0; r < m; ++r) {
         if (kind_[first + r] != RowKind::Objective) continue;
-        const double* row = rows.jacobian.valuePtr() + valueStart_[k] + static_cast<size_t>(r) * width;
+        const double* row = rows.jacobian.valuePtr() + layout_->valueStart[k] + static_cast<size_t>(r) * width;
         const int* slot = gaussNewtonSlots_.data() + gaussNewtonStart_[k];
         for (int j = 0; j < width; ++j)
           for (int i = j; i < width; ++i) g[*slot++] += row[i] * row[j];
@@ -285,14 +318,10 @@ class RawEvaluator {
   }
 
  private:
-  // The Jacobian's row pattern: term k's rows hold the sorted tangent columns its blocks move
-  // (width_[k] of them); stacked input i of the term lands in slot slot_[slotStart_[k] + i] of
-  // each row (-1: a constant coordinate). A block none of whose coordinates moves gets no
-  // Jacobian (blockMoves_, from blockStart_[k]). Flat arrays, the pattern sized once and written
-  // in place, the slots read from a table: an evaluator is built per solve phase (a warm polish
-  // at every edit), and with a row-by-row append, a copy of the result and a binary search per
-  // input the jump's took 2.6 ms to construct, 2.0 ms like this.
-  void buildPattern() {
+  // RowLayout's arrays and pattern from the terms. Flat arrays, the pattern sized once and
+  // written in place, the slots read from a table: with a row-by-row append, a copy of the result
+  // and a binary search per input the jump's evaluator took 2.6 ms to construct, 2.0 ms like this.
+  void buildLayout(RowLayout* L) const {
     std::vector<std::vector<int>> termColumns(terms_.size());
     std::vector<int> slotOf(static_cast<size_t>(tangent_), -1);  // a column's slot in the current term
     size_t nonzeros = 0;
@@ -303,23 +332,24 @@ class RawEvaluator {
         if (c >= 0) cols.push_back(c);
       std::sort(cols.begin(), cols.end());
       cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
-      slotStart_.push_back(static_cast<int>(slot_.size()));
+      L->slotStart.push_back(static_cast<int>(L->slot.size()));
       for (size_t i = 0; i < cols.size(); ++i) slotOf[static_cast<size_t>(cols[i])] = static_cast<int>(i);
-      for (int c : stacked) slot_.push_back(c < 0 ? -1 : slotOf[static_cast<size_t>(c)]);
-      blockStart_.push_back(static_cast<int>(blockMoves_.size()));
+      for (int c : stacked) L->slot.push_back(c < 0 ? -1 : slotOf[static_cast<size_t>(c)]);
+      L->blockStart.push_back(static_cast<int>(L->blockMoves.size()));
       auto input = stacked.begin();
       for (int size : terms_[k]->parameter_block_sizes()) {
-        blockMoves_.push_back(std::any_of(input, input + size, [](int c) { return c >= 0; }));
+        L->blockMoves.push_back(std::any_of(input, input + size, [](int c) { return c >= 0; }));
         input += size;
       }
-      width_.push_back(static_cast<int>(cols.size()));
-      valueStart_.push_back(static_cast<int>(nonzeros));
+      L->width.push_back(static_cast<int>(cols.size()));
+      L->valueStart.push_back(static_cast<int>(nonzeros));
       nonzeros += static_cast<size_t>(terms_[k]->num_residuals()) * cols.size();
     }
-    pattern_.resize(rows(), tangent_);
-    pattern_.resizeNonZeros(static_cast<Eigen::Index>(nonzeros));
-    int* outer = pattern_.outerIndexPtr();
-    int* inner = pattern_.innerIndexPtr();
+    SpRow& pattern = L->pattern;
+    pattern.resize(rows(), tangent_);
+    pattern.resizeNonZeros(static_cast<Eigen::Index>(nonzeros));
+    int* outer = pattern.outerIndexPtr();
+    int* inner = pattern.innerIndexPtr();
     int row = 0, at = 0;
     outer[0] = 0;
     for (size_t k = 0; k < terms_.size(); ++k) {
@@ -330,13 +360,13 @@ class RawEvaluator {
         outer[++row] = at;
       }
     }
-    std::fill(pattern_.valuePtr(), pattern_.valuePtr() + nonzeros, 0.0);
+    std::fill(pattern.valuePtr(), pattern.valuePtr() + nonzeros, 0.0);
   }
   bool hasPattern(const SpRow& J) const {
-    return J.rows() == pattern_.rows() && J.cols() == pattern_.cols() && J.isCompressed() &&
-           J.nonZeros() == pattern_.nonZeros() &&
-           std::equal(J.outerIndexPtr(), J.outerIndexPtr() + J.rows() + 1, pattern_.outerIndexPtr()) &&
-           std::equal(J.innerIndexPtr(), J.innerIndexPtr() + J.nonZeros(), pattern_.innerIndexPtr());
+    return J.rows() == layout_->pattern.rows() && J.cols() == layout_->pattern.cols() && J.isCompressed() &&
+           J.nonZeros() == layout_->pattern.nonZeros() &&
+           std::equal(J.outerIndexPtr(), J.outerIndexPtr() + J.rows() + 1, layout_->pattern.outerIndexPtr()) &&
+           std::equal(J.innerIndexPtr(), J.innerIndexPtr() + J.nonZeros(), layout_->pattern.innerIndexPtr());
   }
   // Term k's rows into rows, and with `values` its Jacobian into its slots of the pattern: straight
   // from the kernel's Jacobian (TermResidual::rawRowsWithJacobian), or for a moving residual
@@ -347,21 +377,21 @@ class RawEvaluator {
     const std::vector<int32_t>& sizes = term.parameter_block_sizes();
     const int m = term.num_residuals();
     if (!values) return term.Evaluate(parameters_[k].data(), rows, nullptr);
-    if (!term.moving()) return term.rawRowsWithJacobian(rows, slot_.data() + slotStart_[k], width_[k], values + valueStart_[k]);
+    if (!term.moving()) return term.rawRowsWithJacobian(rows, layout_->slot.data() + layout_->slotStart[k], layout_->width[k], values + layout_->valueStart[k]);
     size_t total = 0;
     for (int size : sizes) total += static_cast<size_t>(m) * size;
     blockJacobians->resize(total);
     pointers->assign(sizes.size(), nullptr);
     size_t at = 0;
     for (size_t b = 0; b < sizes.size(); ++b) {
-      if (blockMoves_[blockStart_[k] + b]) (*pointers)[b] = blockJacobians->data() + at;
+      if (layout_->blockMoves[layout_->blockStart[k] + b]) (*pointers)[b] = blockJacobians->data() + at;
       at += static_cast<size_t>(m) * sizes[b];
     }
     if (!term.Evaluate(parameters_[k].data(), rows, pointers->data())) return false;
-    const int width = width_[k];
-    double* row = values + valueStart_[k];
+    const int width = layout_->width[k];
+    double* row = values + layout_->valueStart[k];
     std::fill(row, row + static_cast<size_t>(m) * width, 0.0);
-    const int* slot = slot_.data() + slotStart_[k];
+    const int* slot = layout_->slot.data() + layout_->slotStart[k];
     size_t input = 0;
     for (size_t b = 0; b < sizes.size(); ++b) {
       const double* J = (*pointers)[b];
@@ -380,25 +410,25 @@ class RawEvaluator {
     gaussNewtonStart_.assign(terms_.size() + 1, 0);
     auto objectiveTerm = [&](size_t k) {
       for (int r = 0; r < terms_[k]->num_residuals(); ++r)
-        if (kind_[firstRow_[k] + r] == RowKind::Objective) return width_[k] > 0;
+        if (kind_[firstRow_[k] + r] == RowKind::Objective) return layout_->width[k] > 0;
       return false;
     };
-    auto columnsOf = [&](size_t k) { return pattern_.innerIndexPtr() + valueStart_[k]; };
+    auto columnsOf = [&](size_t k) { return layout_->pattern.innerIndexPtr() + layout_->valueStart[k]; };
     for (size_t k = 0; k < terms_.size(); ++k)
       if (objectiveTerm(k))
-        for (int j = 0; j < width_[k]; ++j)
-          for (int i = j; i < width_[k]; ++i) pairs.emplace_back(columnsOf(k)[i], columnsOf(k)[j], 0.0);
+        for (int j = 0; j < layout_->width[k]; ++j)
+          for (int i = j; i < layout_->width[k]; ++i) pairs.emplace_back(columnsOf(k)[i], columnsOf(k)[j], 0.0);
     gaussNewton_.resize(tangent_, tangent_);
     gaussNewton_.setFromTriplets(pairs.begin(), pairs.end());
     gaussNewton_.makeCompressed();
     for (size_t k = 0; k < terms_.size(); ++k) {
       gaussNewtonStart_[k] = static_cast<int>(gaussNewtonSlots_.size());
       if (!objectiveTerm(k)) continue;
-      for (int j = 0; j < width_[k]; ++j) {
+      for (int j = 0; j < layout_->width[k]; ++j) {
         const int col = columnsOf(k)[j];
         const int* begin = gaussNewton_.innerIndexPtr() + gaussNewton_.outerIndexPtr()[col];
         const int* end = gaussNewton_.innerIndexPtr() + gaussNewton_.outerIndexPtr()[col + 1];
-        for (int i = j; i < width_[k]; ++i)
+        for (int i = j; i < layout_->width[k]; ++i)
           gaussNewtonSlots_.push_back(static_cast<int>(std::lower_bound(begin, end, columnsOf(k)[i]) -
                                                        gaussNewton_.innerIndexPtr()));
       }
@@ -410,10 +440,7 @@ class RawEvaluator {
   int threads_ = 1;
   int tangent_ = 0;
   std::vector<std::vector<const double*>> parameters_;  // each term's parameter blocks, in its order
-  std::vector<int> slot_, slotStart_, width_, blockStart_;
-  std::vector<char> blockMoves_;
-  std::vector<int> valueStart_;  // each term's first value in the pattern
-  SpRow pattern_;
+  std::shared_ptr<const RowLayout> layout_;  // the row pattern and the terms' slots in it
   std::vector<char> needed_;  // per multiplier row (limitJacobians); empty: every row
   double neededBelow_ = 0;
   std::vector<const TermResidual*> terms_;

@@ -142,5 +142,47 @@ TEST(RawRows, AFreeLiftOffsMovingRowsAreCeressToo) {
   expectCeresRows(*problem);
 }
 
+// An evaluator of a problem rebuilt after an edit of a target (the jump's end pose moved: the same
+// structure) takes the last evaluator's layout (RowLayout) and gives the rows and Jacobian of an
+// evaluator that built its own, to the bit; one of another structure (the jump at another
+// control-point rate) builds its own.
+TEST(RawRows, AnEditOfATargetReusesTheRowLayout) {
+  Scene scene = testing::shippedScene("luxo_jump.json");
+  std::string error;
+  auto first = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(first) << error;
+  const raw::Variables firstVars(first->ceresProblem());
+  const raw::RawEvaluator firstEvaluator(*first, firstVars, 1);
+  for (TermSpec& t : scene.terms)
+    if (t.id == "end_pose")
+      for (auto& [dof, value] : t.values)
+        if (dof == "base_x") value += 0.02;
+  auto moved = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(moved) << error;
+  testing::perturb(*moved, 5, 0.05);
+  const raw::Variables vars(moved->ceresProblem());
+  raw::RawEvaluator reusing(*moved, vars, 2, firstEvaluator.layout());
+  EXPECT_EQ(reusing.layout(), firstEvaluator.layout());
+  raw::RawEvaluator own(*moved, vars, 2);
+  EXPECT_NE(own.layout(), firstEvaluator.layout());
+  raw::RawRows a, b;
+  ASSERT_TRUE(reusing.evaluate(&a, true));
+  ASSERT_TRUE(own.evaluate(&b, true));
+  EXPECT_EQ((a.values - b.values).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(Eigen::MatrixXd(a.jacobian), Eigen::MatrixXd(b.jacobian));
+  EXPECT_GT(a.jacobian.nonZeros(), 0);
+
+  scene.transcription.controlPointsPerSecond += 5;
+  auto finer = SpacetimeProblem::build(scene, &error);
+  ASSERT_TRUE(finer) << error;
+  const raw::Variables finerVars(finer->ceresProblem());
+  raw::RawEvaluator other(*finer, finerVars, 1, firstEvaluator.layout());
+  EXPECT_NE(other.layout(), firstEvaluator.layout());
+  raw::RawRows c;
+  ASSERT_TRUE(other.evaluate(&c, true));
+  EXPECT_EQ(c.jacobian.cols(), finerVars.tangent);
+  EXPECT_EQ(c.values.size(), other.rows());
+}
+
 }  // namespace
 }  // namespace spacetime
