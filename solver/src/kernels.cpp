@@ -563,43 +563,34 @@ ClearanceKernel::ClearanceKernel(std::shared_ptr<const Model<double>> model, int
 }
 
 template <class T>
-void ClearanceKernel::compute(const T* z, T* rows) const {
-  const Vec3<T> p = pointPosition(bodyPose(*model_, z, body_), point_);
-  if (!box_) {
-    rows[0] = height_ - p.y();
-    return;
-  }
+T ClearanceKernel::row(const Vec3<T>& p, int* axis, double* sign) const {
+  *axis = 1, *sign = -1;
+  if (!box_) return height_ - p.y();
   T outside = p.x() - boxMax_.x();
+  *axis = 0;  // the row is -outside
   for (int k = 0; k < 3; ++k) {
     const T above = p[k] - boxMax_[k], below = boxMin_[k] - p[k];
-    if (above > outside) outside = above;
-    if (below > outside) outside = below;
+    if (above > outside) outside = above, *axis = k, *sign = -1;
+    if (below > outside) outside = below, *axis = k, *sign = 1;
   }
-  rows[0] = -outside;
+  return -outside;
+}
+
+template <class T>
+void ClearanceKernel::compute(const T* z, T* rows) const {
+  int axis;
+  double sign;
+  rows[0] = row(pointPosition(bodyPose(*model_, z, body_), point_), &axis, &sign);
 }
 SPACETIME_DEFINE_EVALUATORS(ClearanceKernel)
 
 void ClearanceKernel::rawJacobian(const double* z, double* rows, double* jacobian) const {
-  const int n = inputs_;
   const BodySlopes body(*model_, z, body_);
   const Eigen::Vector3d p = body.position(point_);
-  // The row is sign * p[axis] + a constant: height - p_y, or the active face's as compute()
-  // picks it (the first strictly largest).
-  int axis = 1;
-  double sign = -1;
-  if (!box_) {
-    rows[0] = height_ - p.y();
-  } else {
-    double outside = p.x() - boxMax_.x();
-    axis = 0, sign = -1;  // rows[0] = -outside
-    for (int k = 0; k < 3; ++k) {
-      const double above = p[k] - boxMax_[k], below = boxMin_[k] - p[k];
-      if (above > outside) outside = above, axis = k, sign = -1;
-      if (below > outside) outside = below, axis = k, sign = 1;
-    }
-    rows[0] = -outside;
-  }
-  for (int d = 0; d < n; ++d) jacobian[d] = sign * body.slope(d, p)[axis];
+  int axis;
+  double sign;
+  rows[0] = row(p, &axis, &sign);
+  for (int d = 0; d < inputs_; ++d) jacobian[d] = sign * body.slope(d, p)[axis];
 }
 
 // --- GroundClearanceKernel ---------------------------------------------------------------
@@ -615,23 +606,21 @@ GroundClearanceKernel::GroundClearanceKernel(std::shared_ptr<const Model<double>
 
 template <class T>
 void GroundClearanceKernel::compute(const T* z, T* rows) const {
-  constexpr double kSmoothing = 1e-3;
   const Transform<T> X = bodyPose(*model_, z, body_);  // world point = E^T p + r
   const Mat3<T> rotation = X.E.transpose();
   for (size_t i = 0; i < features_.size(); ++i)
-    rows[i] = T(ground_) - features_[i].lowestHeight(rotation, X.r, kSmoothing);
+    rows[i] = T(ground_) - features_[i].lowestHeight(rotation, X.r, kDiscSmoothing);
 }
 SPACETIME_DEFINE_EVALUATORS(GroundClearanceKernel)
 
 void GroundClearanceKernel::rawJacobian(const double* z, double* rows, double* jacobian) const {
-  constexpr double kSmoothing = 1e-3;  // as compute()
   const int n = inputs_;
   const BodySlopes body(*model_, z, body_);
   const Mat3<double> rotation = body.X.E.transpose();
   const Eigen::Vector3d& origin = body.X.r;
   for (size_t i = 0; i < features_.size(); ++i) {
     const LowestPointFeature& f = features_[i];
-    rows[i] = ground_ - f.lowestHeight(rotation, origin, kSmoothing);
+    rows[i] = ground_ - f.lowestHeight(rotation, origin, kDiscSmoothing);
     // The height's slope in a world rotation w of the body, (w x a)_y for a = R p, and in a move
     // of its origin, e_y; a disc adds r n_y / sqrt(1 - n_y^2 + eps^2) times the slope of
     // n_y = (R n)_y, (w x b)_y for b = R n, while 1 - n_y^2 is not clamped at 0.
@@ -640,7 +629,7 @@ void GroundClearanceKernel::rawJacobian(const double* z, double* rows, double* j
     if (f.isDisc()) {
       const Eigen::Vector3d b = rotation * f.discNormal;
       const double across = 1 - b.y() * b.y();
-      if (!(across < 0)) slopeTurn += f.discRadius * b.y() / std::sqrt(across + kSmoothing * kSmoothing) * Eigen::Vector3d(-b.z(), 0, b.x());
+      if (!(across < 0)) slopeTurn += f.discRadius * b.y() / std::sqrt(across + kDiscSmoothing * kDiscSmoothing) * Eigen::Vector3d(-b.z(), 0, b.x());
     }
     // Column d: the body turns at w_d and its origin moves at v_d + w_d x origin; the row is
     // ground - height.

@@ -317,6 +317,10 @@ class ClearanceKernel : public Kernel {
   void rawJacobian(const double* z, double* rows, double* jacobian) const override;
 
  private:
+  // The row at the point's world position p, and the coordinate it follows: the row is
+  // sign * p[axis] plus a constant (height - p_y, or the face whose distance is first the largest).
+  template <class T>
+  T row(const Vec3<T>& p, int* axis, double* sign) const;
   std::shared_ptr<const Model<double>> model_;
   int body_;
   Eigen::Vector3d point_;
@@ -340,6 +344,7 @@ class GroundClearanceKernel : public Kernel {
   void rawJacobian(const double* z, double* rows, double* jacobian) const override;
 
  private:
+  static constexpr double kDiscSmoothing = 1e-3;  // eps above
   std::shared_ptr<const Model<double>> model_;
   int body_;
   std::vector<LowestPointFeature> features_;
