@@ -23,6 +23,16 @@
 // released, as the polish does. These are the active-set steps of quadratic_program.h on a
 // factorisation kept from another point.
 //
+// An edit too large for that (the first step's program does not settle: moved 10 cm, the jump's
+// landing changes more than 25 rows of the active set) is made gradually, by continuation in the
+// task (Allgower and Georg, Introduction to Numerical Continuation Methods, ch. 2): the edit's
+// change e of the rows at the kept optimum (NewtonFactors::values) defines the problems with rows
+// r(x) - (1 - theta) e, which the kept optimum solves at theta = 0 and which are the edited
+// problem at theta = 1. Each step aims at theta + stride, the stride halved (before anything is
+// evaluated) while its program does not settle; a stage's point takes further steps at its
+// theta until it tracks the path (residual below 1e-3) before theta moves on. The steps stand
+// on the kept factorisation throughout, as real-time iterations track a moving reference.
+//
 // The steps stop as soon as the residual stops falling fast (a large edit, a new active set
 // the old matrix does not describe, the rounding floor of a matrix of another point): the
 // caller then takes full Newton steps, which factorise the matrix at the current point, from
@@ -40,17 +50,28 @@
 
 namespace spacetime {
 
-// The KKT matrix K = [W A^T; A -dc I] of a polish's last Newton step (newton_polish.cpp), its
-// LDL^T, and the rows A holds, in K's order. Kept with the multipliers
-// (AugmentedLagrangianState::newtonFactors), so a warm start from the solution finds it.
+// The KKT matrix K = [W A^T; A -dc I] of a Newton step (its lower triangle) and its LDL^T.
+struct KktFactorisation {
+  raw::SpMat matrix;
+  Eigen::SimplicialLDLT<raw::SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+};
+
+// The KKT factorisation of a polish's last Newton step, the rows A holds (in K's order), and
+// the rows' values at the optimum this travels with. Kept with the multipliers
+// (AugmentedLagrangianState::newtonFactors), so a warm start from the solution finds it; a polish
+// that reaches its optimum by steps on the factorisation passes it on, shared, with its own
+// optimum's values.
 struct NewtonFactors {
   int variables = 0, rows = 0;  // the problem's tangent size and its row count
   std::vector<int> constraint;  // K's constraint rows (problem rows), in order
   double constraintRegularisation = 0;  // dc
-  Eigen::SimplicialLDLT<raw::SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  std::shared_ptr<const KktFactorisation> kkt;
   // The raw rows' layout of the polish that factorised K: the next warm polish's evaluator takes
   // it where the problem's structure is the same (raw::RowLayout).
   std::shared_ptr<const raw::RowLayout> layout;
+  // The rows' values at the optimum (one per row): an edit's change of the rows there is the
+  // steps' continuation (chordSteps).
+  raw::Vec values;
 };
 
 namespace raw {

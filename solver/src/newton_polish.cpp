@@ -148,8 +148,8 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   const std::string outOfSteps = "no KKT point within " + std::to_string(options.maxIterations) + " Newton steps";
   // The factorisation of the last Newton step, kept with the multipliers where the polish ends at
   // a KKT point (AugmentedLagrangianState::newtonFactors): the next warm polish steps on it.
-  auto factors = std::make_shared<NewtonFactors>();
-  auto& ldlt = factors->ldlt;
+  auto factorisation = std::make_shared<KktFactorisation>();
+  auto& ldlt = factorisation->ldlt;
   std::vector<int> factorisedRows;  // the held rows of the last factorisation (K's constraint rows)
   bool haveFactors = false;
   bool analysed = false;  // the KKT pattern changes with the active set
@@ -294,12 +294,19 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
         termRows[k].assign(first, first + evaluator.terms()[k]->num_residuals());
       }
       result.measures = measure(evaluator.terms(), termRows);
-      if (haveFactors) {
-        factors->variables = n;
-        factors->rows = rowCount;
-        factors->constraint = factorisedRows;
-        factors->constraintRegularisation = dc;
-        factors->layout = evaluator.layout();
+      const std::shared_ptr<const NewtonFactors>& kept = al.newtonFactors;
+      if (haveFactors || (kept && kept->variables == n && kept->rows == rowCount)) {
+        // This polish's last factorisation, or the one its steps stood on, with this optimum's rows.
+        auto factors = haveFactors ? std::make_shared<NewtonFactors>() : std::make_shared<NewtonFactors>(*kept);
+        if (haveFactors) {
+          factors->variables = n;
+          factors->rows = rowCount;
+          factors->constraint = factorisedRows;
+          factors->constraintRegularisation = dc;
+          factors->kkt = factorisation;
+          factors->layout = evaluator.layout();
+        }
+        factors->values = rows.values;
         al.newtonFactors = factors;
       }
       return finish("KKT conditions met");
@@ -326,7 +333,8 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     // tangent space only if K has exactly m negative eigenvalues, which the signs of LDL^T's D
     // count (Sylvester's law of inertia).
     const size_t base = t.size();
-    SpMat K(n + m, n + m);
+    SpMat& K = factorisation->matrix;  // kept with its factors: the steps on them refine their solves
+    K.resize(n + m, n + m);
     double shift = 0;
     bool factorised = false;
     for (int attempt = 0; attempt < 30 && !factorised; ++attempt) {
