@@ -292,8 +292,8 @@ TEST(NewtonPolish, AnEditStepsOnTheKeptFactorisation) {
 }
 
 // A drag: the end pose moved 2 cm at a time to 10 cm, each solve warm from the one before. Every
-// edit is made by steps on the cold solve's factorisation alone (10-12 steps each after the
-// first's 6, as the point moves away from the factorisation's), and the last lands on the
+// edit is made by steps on the cold solve's factorisation alone (6, 8, 8, 10 and 11 steps, as
+// the point moves away from the factorisation's), and the last lands on the
 // optimum the full Newton steps reach in one 10 cm edit. Each solve passes the factorisation on
 // with its own optimum's rows (NewtonFactors::values), from which the next edit's continuation
 // starts.
