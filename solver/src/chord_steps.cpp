@@ -184,16 +184,16 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
     const HeldKkt point = heldKkt(evaluator, *rows, objective, *held, *multipliers);
     const std::vector<int>& constraint = point.constraint;
     const Vec &y = point.y, &gradient = point.lagrangianGradient;
-    const double kkt = point.kkt, violation = point.violation;
+    const double kkt = point.kkt, violation = point.violation, residual = std::max(kkt, violation);
     // Only the edited problem's residual is judged: that of a stage's problem says nothing of it.
-    result.residual = target == 1 ? std::max(kkt, violation) : std::numeric_limits<double>::infinity();
+    result.residual = target == 1 ? residual : std::numeric_limits<double>::infinity();
     if (step == 0 && target == 1) result.startResidual = result.residual;
     if (target != judged) {
       judged = target;
       best = std::numeric_limits<double>::infinity();
       withoutProgress = 0;
     }
-    if (!(std::max(kkt, violation) < 1e300)) return stop("the residual is not finite");
+    if (!(residual < 1e300)) return stop("the residual is not finite");
     if (target == 1) {
       if (kkt <= kktTolerance && violation <= tolerance) {
         // A KKT point of the held rows: those that pull are released (newton_polish.h's rule).
@@ -219,7 +219,6 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
         continue;
       }
     }
-    const double residual = std::max(kkt, violation);
     if (residual < kProgress * best) {
       withoutProgress = 0;
     } else if (++withoutProgress >= kStepsWithoutProgress) {
@@ -269,7 +268,6 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
       const double* end = rows->jacobian.valuePtr() + rows->jacobian.outerIndexPtr()[row + 1];
       if (rows->values[row] > tolerance || std::any_of(begin, end, [](double x) { return x != 0; })) joinable.push_back(row);
     }
-    const std::vector<char> heldAtStep = *held;
     auto mayLeave = [&](int row) { return residual < kLeaveAgain * left[static_cast<size_t>(row)]; };
     bool settled = false;
     for (int change = 0; change < kMaxChanges && !settled; ++change) {
@@ -336,10 +334,10 @@ ChordResult chordSteps(const NewtonFactors& factors, RawEvaluator& evaluator, co
     // moved 10 cm took 15 steps instead of 17, and in a drag 2 cm at a time 8, 8, 10 and 11
     // instead of 12, 10, 11 and 12 (`sqp`'s warm 10 cm edit 11 instead of 13; a 2 cm edit from
     // the optimum, at a rate of 10-40 a step, the same 6).
-    if (target != 1 || *held != heldAtStep) mixing.reset();
     std::vector<int> heldNow;
     for (int row = 0; row < rowCount; ++row)
       if ((*held)[row]) heldNow.push_back(row);
+    if (target != 1 || heldNow != constraint) mixing.reset();  // constraint: the rows held at the start
     Vec chord(n + static_cast<int>(heldNow.size()));
     chord.head(n) = u.head(n);
     for (size_t i = 0; i < heldNow.size(); ++i)
