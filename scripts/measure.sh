@@ -188,6 +188,9 @@ for b in rows:
                  f"then {b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}")
     elif "lm_iterations" in b:
         steps = f"{b['lm_iterations']:.0f} + {b.get('newton_steps', 0):.0f}"
+    elif "qp_iterations" in b:  # one quadratic program: its interior-point iterations and their cost
+        steps = (f"{b['qp_iterations']:.0f} interior-point iterations, {ms / max(1, b['qp_iterations']):.2f} ms each "
+                 f"({b['variables']:.0f} variables, {b['equalities']:.0f} equalities, {b['inequalities']:.0f} inequalities)")
     elif "ip_iterations" in b:  # the interior point (IPOPT): its iterations and their cost
         steps = f"{b['ip_iterations']:.0f} IPOPT iterations"
         if b.get("ip_ms_per_iteration"):

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "solver/quadratic_program.h"
+#include "supernodal_ldlt.h"
 
 namespace spacetime {
 namespace qp {
@@ -65,7 +66,7 @@ struct QpWorkspace::Pattern {
     }
   };
   std::unordered_map<std::vector<int>, std::vector<int>, ColumnsHash> rowSlots;
-  Eigen::SimplicialLDLT<SpMat, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
+  qp::SupernodalLdlt ldlt;
 
   // A pattern holding every entry `qp` scatters into and every entry of `previous`.
   Pattern(const QuadraticProgram& qp, const Pattern* previous) {

@@ -10,10 +10,12 @@
 #include <ceres/crs_matrix.h>
 #include <ceres/problem.h>
 
+#include "../../solver/src/program_steps.h"
 #include "../../solver/src/raw_rows.h"
 #include "../shipped_scene.h"
 #include "core/scene_io.h"
 #include "solver/augmented_lagrangian.h"
+#include "solver/quadratic_program.h"
 #include "solver/refinement.h"
 
 namespace spacetime {
@@ -205,6 +207,55 @@ void BM_LuxoRawRows(benchmark::State& state, int threads) {
   state.counters["cols"] = static_cast<double>(rows.jacobian.cols());
 }
 
+// One quadratic program of a scene's shape solved by the interior point (quadratic_program.h):
+// the program of a Gauss-Newton SQP step at the scene's optimum (found once, by the default
+// method), with H = J_r^T J_r, every equality row and the inequality rows within 0.05 of their
+// bound, as `sqp` holds them. The same program every time, so the interior point takes the
+// same iterations, and the time over qp_iterations is the cost of one of them: K's assembly, its
+// LDL^T and the predictor's and corrector's solves. The workspace (K's pattern and analysis) is shared
+// between the repetitions, as between an SQP's programs.
+void BM_ProgramAtOptimum(benchmark::State& state, const std::string& file) {
+  const Scene scene = testing::shippedScene(file);
+  std::string error;
+  auto problem = SpacetimeProblem::build(scene, &error);
+  SolverOptions options = solverOptionsFor(scene.solver);
+  options.threads = 2;
+  solveSpacetime(*problem, options);
+  const raw::Variables vars(problem->ceresProblem());
+  raw::RawEvaluator evaluator(*problem, vars, 2);
+  raw::RawRows rows;
+  evaluator.evaluate(&rows, true);
+  std::vector<int> objective, equality, held;
+  for (int r = 0; r < evaluator.rows(); ++r) {
+    const RowKind kind = evaluator.kind(r);
+    if (kind == RowKind::Objective) objective.push_back(r);
+    else if (kind == RowKind::Equality) equality.push_back(r);
+    else if (rows.values[r] > -raw::kMargin) held.push_back(r);
+  }
+  const int n = static_cast<int>(rows.jacobian.cols());
+  raw::Triplets t;
+  for (int i = 0; i < n; ++i) t.emplace_back(i, i, 1e-6);
+  evaluator.appendGaussNewton(rows, &t);
+  QuadraticProgram qp;
+  qp.hessian.resize(n, n);
+  qp.hessian.setFromTriplets(t.begin(), t.end());
+  qp.gradient = raw::transposeTimes(rows.jacobian, objective, raw::selectValues(rows.values, objective));
+  qp.equalities = raw::selectRows(rows.jacobian, equality);
+  qp.equalityTargets = -raw::selectValues(rows.values, equality);
+  qp.inequalities = raw::selectRows(rows.jacobian, held);
+  qp.inequalityBounds = -raw::selectValues(rows.values, held);
+  QpOptions qpOptions;
+  qpOptions.convex = true;
+  QpWorkspace workspace;
+  QpResult result;
+  for (auto _ : state) result = solveQuadraticProgram(qp, qpOptions, &workspace);
+  state.counters["converged"] = result.converged ? 1 : 0;
+  state.counters["qp_iterations"] = result.iterations;
+  state.counters["variables"] = n;
+  state.counters["equalities"] = static_cast<double>(equality.size());
+  state.counters["inequalities"] = static_cast<double>(held.size());
+}
+
 // Building the jump's problem from its scene: what every edit pays before its solve (the editor
 // and spacetime-cli build a problem per solve; LuxoWarmResolve leaves it out of its time).
 void BM_LuxoProblemBuild(benchmark::State& state) {
@@ -269,6 +320,8 @@ BENCHMARK_CAPTURE(BM_LuxoJacobian, fixed_lift_off, false)->Unit(benchmark::kMill
 BENCHMARK_CAPTURE(BM_LuxoJacobian, free_lift_off, true)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoRawRows, 1_thread, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_LuxoRawRows, 2_threads, 2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_ProgramAtOptimum, luxo_jump, std::string("luxo_jump.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_ProgramAtOptimum, luxo_3d, std::string("luxo_3d.json"))->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace spacetime

@@ -14,7 +14,8 @@
 // system (Vanderbei 1995)
 //     [ H + C^T (Z/S) C + dx I    A^T  ] [ dx ]   [ -r_d - C^T S^-1 (Z r_i - r_c) ]
 //     [ A                        -dy I ] [ dy ] = [ -r_e                          ]
-// by a sparse LDL^T whose pattern is analysed once (the band of H, C^T C and A^T A). H only
+// by a supernodal sparse LDL^T (solver/src/supernodal_ldlt.h) whose pattern is analysed once
+// (the band of H, C^T C and A^T A). H only
 // needs to be convex on the feasible directions; where the factorisation shows it is not (more
 // than |A| negative pivots, Sylvester's law of inertia) a multiple of a diagonal metric (the
 // identity unless the program gives one) is added to H for the rest of the solve and reported,
