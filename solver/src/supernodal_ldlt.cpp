@@ -174,7 +174,6 @@ void SupernodalLdlt::factorize(const SpMat& upper) {
   values_.setZero();
   const double* k = upper.valuePtr();
   for (size_t p = 0; p < slots_.size(); ++p) values_[slots_[p]] += k[p];
-  Eigen::MatrixXd scaled, product;
   for (size_t si = 0; si < supernodes_.size(); ++si) {
     const Supernode& s = supernodes_[si];
     const int w = s.width, h = s.height(), below = h - w;
