@@ -351,7 +351,7 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   co.update_state_every_iteration = true;
   // Start from (nearly) Gauss-Newton steps and allow non-monotonic progress: measured on the
   // standing lamp, 164 instead of 253 Levenberg-Marquardt iterations.
-  co.initial_trust_region_radius = 1e10;
+  co.initial_trust_region_radius = options.initialTrustRegionRadius;
   co.use_nonmonotonic_steps = true;
   // Bounds (free contact ends) make Ceres follow every step with a projected Armijo line search
   // that re-evaluates the Jacobian; its steps are projected onto the bounds without it. Measured

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 #include "chord_steps.h"
 #include "program_steps.h"
@@ -188,32 +190,88 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // inequality it violates is held at the next step. An accepted point becomes x, its rows
   // `rows` and its multipliers the held rows'; a rejected step leaves the variables at the last
   // trial point.
+  //
+  // With a watchdog (N&W §15.6, after Chamberlain et al. 1982) near a KKT point (a reference
+  // below kWatchBelow): a rejected full step whose merit is within kWatch times the reference is
+  // taken once, and the next line search must end below the reference of that step, or the
+  // polish returns to the point before it and backtracks along it. Nearly dependent held rows
+  // (the quadruped's landing anchors, stance and end key, docs/design.md) make a full step raise
+  // the violation before the next one lowers both: of six cold quadruped solves on perturbed
+  // paths (the LM's first radius), two failed their polishes without it and converge with it.
+  // Farther out it took steps that wandered: the 3D lamp's warm 10 cm edit, at references of
+  // 0.16-0.23, ran out of passes where backtracking reaches the KKT point. Only Newton steps are
+  // watched: a program's step that fails leaves the Newton steps to go on from x, which a
+  // watched one that failed would end (the heavy lamp's witkin-kass hand-over).
+  // `watchable`: whether this step may be watched.
+  constexpr double kWatch = 10, kWatchBelow = 1e-2;
+  struct Watched {  // the point before a watched step, and the step
+    std::vector<double> x;
+    RawRows rows;
+    Vec multipliers, dx, yFrom, yTo;
+    std::vector<int> constraint;
+    double reference = 0;
+  };
+  std::optional<Watched> watched;
+  double trialMerit = 0;  // max(KKT residual, held rows' violation) at the last trial point
+  auto tryStep = [&](double alpha, const Vec& dx, const std::vector<int>& constraint, const Vec& yFrom,
+                     const Vec& yTo, double reference) {
+    vars.plus(x, alpha * dx);
+    t0 = Clock::now();
+    const bool finite = evaluator.evaluate(&trial, true);
+    result.jacobianSeconds += secondsSince(t0);
+    trialMerit = std::numeric_limits<double>::infinity();
+    if (!finite) return false;
+    const Vec yTrial = yFrom + alpha * (yTo - yFrom);
+    const Vec gt = raw::transposeTimes(trial.jacobian, objective, raw::selectValues(trial.values, objective));
+    const Vec ct = raw::selectValues(trial.values, constraint);
+    const double kktTrial = (gt + raw::transposeTimes(trial.jacobian, constraint, yTrial)).lpNorm<Eigen::Infinity>() /
+                            std::max(1.0, gt.lpNorm<Eigen::Infinity>());
+    const double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;
+    trialMerit = std::max(kktTrial, violTrial);
+    return trialMerit < reference;
+  };
+  auto acceptTrial = [&](double alpha, const std::vector<int>& constraint, const Vec& yFrom, const Vec& yTo) {
+    const Vec yTrial = yFrom + alpha * (yTo - yFrom);
+    for (size_t i = 0; i < constraint.size(); ++i) multipliers[constraint[i]] = yTrial[static_cast<Eigen::Index>(i)];
+    x = vars.save();
+    rows.values.swap(trial.values);  // O(1): Eigen's swaps exchange the storage
+    rows.jacobian.swap(trial.jacobian);
+  };
+  auto backtrack = [&](double alpha, const Vec& dx, const std::vector<int>& constraint, const Vec& yFrom,
+                       const Vec& yTo, double reference) {
+    for (; alpha >= 0.125; alpha /= 2)
+      if (tryStep(alpha, dx, constraint, yFrom, yTo, reference)) {
+        acceptTrial(alpha, constraint, yFrom, yTo);
+        return true;
+      }
+    return false;
+  };
   auto lineSearch = [&](const Vec& dx, const std::vector<int>& constraint, const Vec& yFrom, const Vec& yTo,
-                        double reference) {
+                        double reference, bool watchable) {
     const Clock::time_point phase = Clock::now();
     bool accepted = false;
-    for (double alpha = 1; alpha >= 0.125 && !accepted; alpha /= 2) {
-      vars.plus(x, alpha * dx);
-      t0 = Clock::now();
-      const bool finite = evaluator.evaluate(&trial, true);
-      result.jacobianSeconds += secondsSince(t0);
-      if (!finite) continue;
-      const Vec yTrial = yFrom + alpha * (yTo - yFrom);
-      const Vec gt = raw::transposeTimes(trial.jacobian, objective, raw::selectValues(trial.values, objective));
-      const Vec ct = raw::selectValues(trial.values, constraint);
-      const double kktTrial = (gt + raw::transposeTimes(trial.jacobian, constraint, yTrial)).lpNorm<Eigen::Infinity>() /
-                              std::max(1.0, gt.lpNorm<Eigen::Infinity>());
-      const double violTrial = ct.size() ? ct.lpNorm<Eigen::Infinity>() : 0.0;
-      accepted = std::max(kktTrial, violTrial) < reference;
-      if (accepted)
-        for (size_t i = 0; i < constraint.size(); ++i) multipliers[constraint[i]] = yTrial[static_cast<Eigen::Index>(i)];
+    if (watched) {
+      const Watched before = std::move(*watched);
+      watched.reset();
+      accepted = backtrack(1, dx, constraint, yFrom, yTo, std::min(reference, before.reference));
+      if (!accepted) {
+        x = before.x;
+        vars.load(x);
+        rows = before.rows;
+        multipliers = before.multipliers;
+        accepted = backtrack(0.5, before.dx, before.constraint, before.yFrom, before.yTo, before.reference);
+      }
+    } else if (tryStep(1, dx, constraint, yFrom, yTo, reference)) {
+      acceptTrial(1, constraint, yFrom, yTo);
+      accepted = true;
+    } else if (watchable && reference < kWatchBelow && trialMerit < kWatch * reference) {
+      watched = Watched{x, rows, multipliers, dx, yFrom, yTo, constraint, reference};
+      acceptTrial(1, constraint, yFrom, yTo);
+      accepted = true;
+    } else {
+      accepted = backtrack(0.5, dx, constraint, yFrom, yTo, reference);
     }
     result.lineSearchSeconds += secondsSince(phase);
-    if (accepted) {
-      x = vars.save();
-      rows.values.swap(trial.values);  // O(1): Eigen's swaps exchange the storage
-      rows.jacobian.swap(trial.jacobian);
-    }
     return accepted;
   };
   // A warm start whose multipliers come with the factorisation of an earlier optimum of this
@@ -412,13 +470,13 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
           limitJacobiansToHeld();
           const std::vector<int> now = heldRows();
           if (!lineSearch(programStep, now, raw::selectValues(before, now), raw::selectValues(multipliers, now),
-                          std::max(kkt, heldViolation)))
+                          std::max(kkt, heldViolation), false))
             vars.load(x);
           continue;
         }
       }
     }
-    if (!lineSearch(d.head(n), constraint, y, d.tail(m), std::max(kkt, heldViolation)))
+    if (!lineSearch(d.head(n), constraint, y, d.tail(m), std::max(kkt, heldViolation), true))
       return giveUp("a Newton step did not reduce the KKT residual");
   }
 }

@@ -67,6 +67,10 @@ struct SolverOptions {
   // names the whole budget.
   double spentSeconds = 0;
   int threads = 1;               // Ceres evaluation threads
+  // The first trust-region radius of each Levenberg-Marquardt solve: large, so they start from
+  // (nearly) Gauss-Newton steps. Another value perturbs the solve's path, which the tests use to
+  // check that a solve does not depend on luck (newton_polish_test.cpp).
+  double initialTrustRegionRadius = 1e10;
   bool warmStart = false;        // keep the problem's current multipliers and penalty
   // Free contact ends (lift-off instants) stay where they are until the constraints are within
   // this: far from feasibility the effort alone would drag them to a bound of their window.
