@@ -196,18 +196,22 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // taken once, and the next line search must end below the reference of that step, or the
   // polish returns to the point before it and backtracks along it. Nearly dependent held rows
   // (the quadruped's landing anchors, stance and end key, docs/design.md) make a full step raise
-  // the violation before the next one lowers both: of six cold quadruped solves on perturbed
-  // paths (the LM's first radius), two failed their polishes without it and converge with it.
+  // the violation before the next one lowers both: of seven cold quadruped solves on perturbed
+  // paths (the LM's first radius), six failed their polishes without it, two of which converge
+  // with it (the other four end unconverged at higher objectives either way).
   // Farther out it took steps that wandered: the 3D lamp's warm 10 cm edit, at references of
   // 0.16-0.23, ran out of passes where backtracking reaches the KKT point. Only Newton steps are
   // watched: a program's step that fails leaves the Newton steps to go on from x, which a
   // watched one that failed would end (the heavy lamp's witkin-kass hand-over).
+  // Nor is a step that crosses an inequality the polish does not hold: held from then on, the
+  // rows it crossed kept the humanoid's polish at a violation of 2.5e-6 for its last 32 passes.
   // `watchable`: whether this step may be watched.
   constexpr double kWatch = 10, kWatchBelow = 1e-2;
-  struct Watched {  // the point before a watched step, and the step
+  struct Watched {  // the point before a watched step, its active set, and the step
     std::vector<double> x;
     RawRows rows;
     Vec multipliers, dx, yFrom, yTo;
+    std::vector<char> held, added;
     std::vector<int> constraint;
     double reference = 0;
   };
@@ -246,6 +250,12 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       }
     return false;
   };
+  // Whether the last trial point violates an inequality the polish does not hold.
+  auto crossesUnheld = [&] {
+    for (int row = 0; row < rowCount; ++row)
+      if (evaluator.kind(row) == RowKind::Inequality && !held[row] && trial.values[row] > options.tolerance) return true;
+    return false;
+  };
   auto lineSearch = [&](const Vec& dx, const std::vector<int>& constraint, const Vec& yFrom, const Vec& yTo,
                         double reference, bool watchable) {
     const Clock::time_point phase = Clock::now();
@@ -255,17 +265,22 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       watched.reset();
       accepted = backtrack(1, dx, constraint, yFrom, yTo, std::min(reference, before.reference));
       if (!accepted) {
+        // Back to the point before, with its active set (the rows held since, were they crossed
+        // by the watched step or by the next, would stay held there).
         x = before.x;
         vars.load(x);
         rows = before.rows;
         multipliers = before.multipliers;
+        held = before.held, added = before.added;
+        limitJacobiansToHeld();
+        analysed = false;
         accepted = backtrack(0.5, before.dx, before.constraint, before.yFrom, before.yTo, before.reference);
       }
     } else if (tryStep(1, dx, constraint, yFrom, yTo, reference)) {
       acceptTrial(1, constraint, yFrom, yTo);
       accepted = true;
-    } else if (watchable && reference < kWatchBelow && trialMerit < kWatch * reference) {
-      watched = Watched{x, rows, multipliers, dx, yFrom, yTo, constraint, reference};
+    } else if (watchable && reference < kWatchBelow && trialMerit < kWatch * reference && !crossesUnheld()) {
+      watched = Watched{x, rows, multipliers, dx, yFrom, yTo, held, added, constraint, reference};
       acceptTrial(1, constraint, yFrom, yTo);
       accepted = true;
     } else {
