@@ -87,8 +87,9 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
   ++running_;
   ++alive_;
   QPointer<SolverJob> self(this);
-  const int threadCount = threads, liveInterval = liveIntervalMs;
-  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, method, threadCount, liveInterval]() {
+  const int threadCount = threads, liveInterval = liveIntervalMs, longestLiveInterval = longestLiveIntervalMs;
+  run->thread = std::thread([this, self, run, scene = sceneIn, warmStart, warmScene, method, threadCount, liveInterval,
+                             longestLiveInterval]() {
     // The solver yields to the interface (and, under Xvfb, to the software renderer): on a
     // 2-core machine an equal-priority solver makes the event loop wait for a time slice.
     // SCHED_IDLE runs it only on otherwise idle time; nice 15 alone was not enough once the
@@ -140,7 +141,7 @@ void SolverJob::start(const Scene& sceneIn, std::optional<SolutionState> warmSta
       std::shared_ptr<SolvedMotion> unrefined;
       int transcriptionsSolved = 0;
       // Live iterates as often as the interface's drawing leaves the solver enough of the CPU.
-      LivePacing pacing(liveInterval * 1e-3);
+      LivePacing pacing(liveInterval * 1e-3, longestLiveInterval * 1e-3);
       pacing.start(wallSeconds(), threadCpuSeconds());
       const RefinementOptions refinement = refinementOptionsFor(scene.solver);
       RefinedSolve solved = solveRefined(

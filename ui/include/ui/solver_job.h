@@ -45,8 +45,10 @@ class SolverJob : public QObject {
   // interface, which must never stall while the solver runs.
   int threads = 1;
   // Shortest time between two live iterates handed to the interface. Drawing one costs whole-
-  // window composites; the interval grows up to 2 s while that starves the solver (LivePacing).
+  // window composites; the interval grows up to longestLiveIntervalMs while that starves the
+  // solver (LivePacing).
   int liveIntervalMs = 250;
+  int longestLiveIntervalMs = 2000;
 
  signals:
   void iterate(std::shared_ptr<const spacetime::ui::SolvedMotion> motion);
