@@ -182,6 +182,25 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   auto limitJacobiansToHeld = [&] {
     raw::limitJacobiansToHeld(evaluator, held, settling ? -raw::kMargin : options.tolerance);
   };
+  // The polish's point with its active set, to return to where steps from it do not hold.
+  struct PolishPoint {
+    std::vector<double> x;
+    RawRows rows;
+    std::vector<char> held, added;
+    Vec multipliers;
+  };
+  auto savePoint = [&] { return PolishPoint{x, rows, held, added, multipliers}; };
+  auto restorePoint = [&](const PolishPoint& p) {
+    x = p.x;
+    vars.load(x);
+    rows = p.rows;
+    held = p.held, added = p.added;
+    multipliers = p.multipliers;
+  };
+  // Whether `values` (one per row) violate an inequality the polish does not hold.
+  auto violatesUnheld = [&](const Vec& values, int row) {
+    return evaluator.kind(row) == RowKind::Inequality && !held[row] && values[row] > options.tolerance;
+  };
   // Steps from x along dx with the held rows' multipliers moving from yFrom to yTo (both in the
   // order of `constraint`): full steps near a KKT point, halved while the step makes the
   // violation of the held rows or the KKT residual no smaller than `reference` (the polish is
@@ -207,11 +226,9 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // rows it crossed kept the humanoid's polish at a violation of 2.5e-6 for its last 32 passes.
   // `watchable`: whether this step may be watched.
   constexpr double kWatch = 10, kWatchBelow = 1e-2;
-  struct Watched {  // the point before a watched step, its active set, and the step
-    std::vector<double> x;
-    RawRows rows;
-    Vec multipliers, dx, yFrom, yTo;
-    std::vector<char> held, added;
+  struct Watched {  // the point before a watched step, and the step
+    PolishPoint before;
+    Vec dx, yFrom, yTo;
     std::vector<int> constraint;
     double reference = 0;
   };
@@ -253,7 +270,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   // Whether the last trial point violates an inequality the polish does not hold.
   auto crossesUnheld = [&] {
     for (int row = 0; row < rowCount; ++row)
-      if (evaluator.kind(row) == RowKind::Inequality && !held[row] && trial.values[row] > options.tolerance) return true;
+      if (violatesUnheld(trial.values, row)) return true;
     return false;
   };
   auto lineSearch = [&](const Vec& dx, const std::vector<int>& constraint, const Vec& yFrom, const Vec& yTo,
@@ -261,26 +278,22 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     const Clock::time_point phase = Clock::now();
     bool accepted = false;
     if (watched) {
-      const Watched before = std::move(*watched);
+      const Watched w = std::move(*watched);
       watched.reset();
-      accepted = backtrack(1, dx, constraint, yFrom, yTo, std::min(reference, before.reference));
+      accepted = backtrack(1, dx, constraint, yFrom, yTo, std::min(reference, w.reference));
       if (!accepted) {
         // Back to the point before, with its active set (the rows held since, were they crossed
         // by the watched step or by the next, would stay held there).
-        x = before.x;
-        vars.load(x);
-        rows = before.rows;
-        multipliers = before.multipliers;
-        held = before.held, added = before.added;
+        restorePoint(w.before);
         limitJacobiansToHeld();
         analysed = false;
-        accepted = backtrack(0.5, before.dx, before.constraint, before.yFrom, before.yTo, before.reference);
+        accepted = backtrack(0.5, w.dx, w.constraint, w.yFrom, w.yTo, w.reference);
       }
     } else if (tryStep(1, dx, constraint, yFrom, yTo, reference)) {
       acceptTrial(1, constraint, yFrom, yTo);
       accepted = true;
     } else if (watchable && reference < kWatchBelow && trialMerit < kWatch * reference && !crossesUnheld()) {
-      watched = Watched{x, rows, multipliers, dx, yFrom, yTo, held, added, constraint, reference};
+      watched = Watched{savePoint(), dx, yFrom, yTo, constraint, reference};
       acceptTrial(1, constraint, yFrom, yTo);
       accepted = true;
     } else {
@@ -299,9 +312,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
   if (const std::shared_ptr<const NewtonFactors> kept = al.newtonFactors;
       kept && kept->variables == n && kept->rows == rowCount) {
     const Clock::time_point phase = Clock::now();
-    const RawRows rowsBefore = rows;
-    const std::vector<char> heldBefore = held, addedBefore = added;
-    const Vec multipliersBefore = multipliers;
+    const PolishPoint before = savePoint();
     const raw::ChordResult chord =
         raw::chordSteps(*kept, evaluator, vars, objective, options, cancel, &rows, &held, &added, &multipliers);
     result.chordSteps = chord.steps;
@@ -309,10 +320,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     if (chord.converged || chord.residual < kChordKept * chord.startResidual) {
       x = vars.save();
     } else {
-      vars.load(x);
-      rows = rowsBefore;
-      held = heldBefore, added = addedBefore;
-      multipliers = multipliersBefore;
+      restorePoint(before);
     }
   }
   for (int it = 0;; ++it) {
@@ -334,7 +342,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
     const bool atKkt = kkt <= options.kktTolerance && result.maxViolation <= options.tolerance;
     bool activeSetChanged = false;
     for (int row = 0; row < rowCount; ++row)
-      if (evaluator.kind(row) == RowKind::Inequality && !held[row] && rows.values[row] > options.tolerance) {
+      if (violatesUnheld(rows.values, row)) {
         held[row] = added[row] = 1;
         activeSetChanged = true;
       }
@@ -463,7 +471,7 @@ PolishResult polishNewton(SpacetimeProblem& problem, const PolishOptions& option
       const Vec linear = rows.values + rows.jacobian * d.head(n);
       bool fits = true;
       for (int row = 0; row < rowCount && fits; ++row)
-        fits = evaluator.kind(row) != RowKind::Inequality || held[row] || linear[row] <= options.tolerance;
+        fits = !violatesUnheld(linear, row);
       for (int i = 0; i < m && fits; ++i)
         fits = evaluator.kind(constraint[i]) != RowKind::Inequality || d[n + i] >= pull;
       if (!fits) {
