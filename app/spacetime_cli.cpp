@@ -3,6 +3,7 @@
 //   spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]
 //                       [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet] [--no-polish]
 //                       [--max-refinements N] [--init SOLVED.json] [--method al|ipopt|sqp|witkin-kass]
+//                       [--second-order]
 //
 // Writes DIR/summary.json, DIR/motion.json, DIR/motion.glb, DIR/scene.json (the scene with the
 // solver's state) and DIR/<character>.urdf and .bvh. A solve starts from --init's stored
@@ -32,6 +33,7 @@
 #include "interop/outputs.h"
 #include "solver/interior_point.h"
 #include "solver/refinement.h"
+#include "solver/second_order.h"
 #include "solver/validity.h"
 
 using namespace spacetime;
@@ -42,7 +44,7 @@ namespace {
   "usage: spacetime-cli solve SCENE.json --out DIR [--rate HZ] [--bvh-rate HZ] [--gltf-rate HZ]\n" \
   "                          [--urdf-z-up] [--threads N] [--max-seconds S] [--quiet]\n" \
   "                          [--no-polish] [--max-refinements N] [--init SOLVED.json]\n" \
-  "                          [--method al|ipopt|sqp|witkin-kass]\n"
+  "                          [--method al|ipopt|sqp|witkin-kass] [--second-order]\n"
 
 constexpr const char* kHelp =
     SPACETIME_CLI_USAGE
@@ -72,6 +74,9 @@ constexpr const char* kHelp =
     "                     DIR or DIR/motion.json of a solve stand for its DIR/scene.json; a\n"
     "                     motion.json alone starts from its motion, fitted to this scene.\n"
     "                     Without it a scene's own stored solution is the start.\n"
+    "  --second-order     after a converged solve, check that the motion is a strict local\n"
+    "                     minimum (the reduced Hessian of the Lagrangian positive definite) and\n"
+    "                     write the check to summary.json as second_order\n"
     "Exit status: 0 converged and valid; 1 outputs not written; 2 bad input or options (nothing\n"
     "written); 3 not converged or out of time (outputs written); 4 converged but the validity\n"
     "report fails (outputs written).\n";
@@ -117,6 +122,7 @@ int run(int argc, char** argv) {
   std::string initPath;  // --init: a scene holding a stored solution
   std::string initGiven;  // --init as given: that scene, or a solve's output standing for it
   std::string method;    // --method: overrides the scene's solver.method
+  bool secondOrder = false;  // --second-order: check the converged motion is a strict local minimum
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) outDir = argv[++i];
@@ -147,6 +153,7 @@ int run(int argc, char** argv) {
       maxRefinements = static_cast<int>(n);
     }
     else if (a == "--init" && i + 1 < argc) initPath = argv[++i];
+    else if (a == "--second-order") secondOrder = true;
     else if (a == "--method" && i + 1 < argc) {
       method = argv[++i];
       SolverMethod m;
@@ -286,8 +293,18 @@ int run(int argc, char** argv) {
                    a.samplesPerSegment, a.legBubbles ? ", leg bubbles" : "", toString(a.status).c_str(),
                    a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,
                    a.maxUnactuatedResidualDense, a.seconds, a.kept ? " (kept)" : "");
+  std::optional<SecondOrderCheck> check;
+  if (secondOrder) {
+    if (summary.converged) {
+      check = checkSecondOrder(*problem, threads);
+    } else {
+      check = SecondOrderCheck();
+      check->reason = "not run: the solve did not converge to a KKT point";
+    }
+  }
   std::string warning;
-  if (!writeSolveOutputs(*problem, summary, validity, outputs, outDir, &error, &warning, solved.attempts)) {
+  if (!writeSolveOutputs(*problem, summary, validity, outputs, outDir, &error, &warning, solved.attempts,
+                         check ? &*check : nullptr)) {
     std::fprintf(stderr, "spacetime-cli: %s\n", error.c_str());
     return 1;
   }
@@ -309,6 +326,9 @@ int run(int argc, char** argv) {
   const auto passing = std::count_if(checks.begin(), checks.end(), [](const ValidityCheck& c) { return c.pass; });
   std::fprintf(stderr, "  validity: %zd of %zu checks pass%s\n", static_cast<std::ptrdiff_t>(passing), checks.size(),
                failing.empty() ? "" : ("; failing:" + failing).c_str());
+  if (check)
+    std::fprintf(stderr, "  second order: %s (%d free directions, %d active constraints, %.3f s)\n", check->reason.c_str(),
+                 check->nullity, check->constraints, check->seconds);
   if (!summary.converged) return 3;
   return failing.empty() ? 0 : 4;
 }

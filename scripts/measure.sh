@@ -13,6 +13,8 @@
 #   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
 #   scripts/measure.sh speedlimits the jump under joint speed limits only (about 10 minutes)
 #   scripts/measure.sh motionstarts solves started from a motion.json alone only (about 2 minutes)
+#   scripts/measure.sh secondorder the second-order check of every shipped scene's optimum, and of
+#                                 each method's on the hurdle and the 0.3 m rung (about 3 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark spacetime-cli spacetime > /dev/null
@@ -166,6 +168,38 @@ PY
   done
 }
 [ "${1:-}" = speedlimits ] && { speed_limits; exit 0; }
+# The second-order check (--second-order) of the optima README.md and docs/design.md quote.
+second_order() {
+  echo
+  echo "## The second-order check (spacetime-cli solve --second-order, 2 threads, single runs)"
+  echo
+  echo "| scene | method | objective | verdict | smallest eigenvalue | free directions | active (dependent) | stationarity | check seconds | along |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+  local runs="" name
+  for name in particle luxo_jump luxo_hurdle luxo_heavy luxo_3d luxo_power_formula biped_jump quadruped_hop humanoid_jump; do
+    runs="$runs resources/scenes/$name.json:al"
+  done
+  runs="$runs resources/scenes/luxo_hurdle.json:sqp tests/scenes/ladder/luxo_hurdle_double.json:al"
+  for method in al sqp witkin-kass; do runs="$runs tests/scenes/ladder/luxo_jump_0.3m.json:$method"; done
+  runs="$runs tests/scenes/ladder/luxo_jump_0.9m.json:al"
+  local run scene method out
+  for run in $runs; do
+    scene=${run%%:*} method=${run##*:} out="$tmp/second_order_$(basename "$scene" .json)_$method"
+    build/app/spacetime-cli solve "$scene" --out "$out" --method "$method" --quiet --second-order 2> /dev/null || true
+    python3 - "$out/summary.json" "$(basename "$scene" .json)" "$method" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+c = s.get("second_order", {})
+if not c.get("checked"):
+    print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6f} | {c.get('reason', 'not run')} | | | | | | |")
+    sys.exit()
+verdict = "strict minimum" if c["strict_minimum"] else "saddle" if "saddle" in c["reason"] else "not shown" if c["smallest_eigenvalue"] < -c["rounding_floor"] else "flat"
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6f} | {verdict} | {c['smallest_eigenvalue']:.3g} | {c['free_directions']} | "
+      f"{c['active_constraints']} ({c['dependent_constraints']}) | {c['stationarity']:.2g} | {c['seconds']:.3f} | {'; '.join(c['direction'][:2])} |")
+PY
+  done
+}
+[ "${1:-}" = secondorder ] && { second_order; exit 0; }
 
 echo "## Solves from the default guess (solve_benchmark, medians of 5)"
 echo
@@ -306,3 +340,4 @@ done
 
 methods_tables
 motion_starts
+second_order

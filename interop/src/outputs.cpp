@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -25,7 +26,8 @@ using json = nlohmann::ordered_json;
 }  // namespace
 
 std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
-                        const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts) {
+                        const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts,
+                        const SecondOrderCheck* secondOrder) {
   json j;
   j["method"] = toString(s.method);
   j["converged"] = s.converged;
@@ -96,6 +98,24 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
                           {"seconds", a.seconds},
                           {"kept", a.kept}});
   j["refinement"] = refinement;
+  if (secondOrder) {
+    const SecondOrderCheck& c = *secondOrder;
+    // Infinite smallest eigenvalue (no free direction) is written as null: JSON has no infinity.
+    auto number = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+    j["second_order"] = {{"checked", c.checked},
+                         {"strict_minimum", c.strictMinimum},
+                         {"smallest_eigenvalue", number(c.smallestEigenvalue)},
+                         {"largest_eigenvalue", number(c.largestEigenvalue)},
+                         {"rounding_floor", c.roundingFloor},
+                         {"free_directions", c.nullity},
+                         {"active_constraints", c.constraints},
+                         {"dependent_constraints", c.dependent},
+                         {"weakly_active", c.weaklyActive},
+                         {"direction", c.direction},
+                         {"stationarity", c.stationarity},
+                         {"seconds", c.seconds},
+                         {"reason", c.reason}};
+  }
   json val;
   val["dense_factor"] = v.denseFactor;
   val["max_unactuated_residual_samples"] = v.maxUnactuatedResidualSamples;
@@ -387,7 +407,7 @@ std::string resumedScenePath(const std::string& path, std::string* error) {
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, const OutputOptions& options, const std::string& dir,
                        std::string* error, std::string* warning,
-                       const std::vector<TranscriptionAttempt>& attempts) {
+                       const std::vector<TranscriptionAttempt>& attempts, const SecondOrderCheck* secondOrder) {
   namespace fs = std::filesystem;
   if (!checkOutputDirectory(dir, error)) return false;
   // Build every file's contents first, then write them; a failure names the file.
@@ -413,7 +433,7 @@ bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& sum
   const SolutionState state = problem.state();
   solved.solution = StoredSolution{state.variables, state.multipliers, state.rho, summary.converged};
   files.emplace_back("scene.json", sceneToJson(solved));
-  files.emplace_back("summary.json", summaryJson(summary, validity, problem, attempts));
+  files.emplace_back("summary.json", summaryJson(summary, validity, problem, attempts, secondOrder));
 
   // All or nothing: the new set goes into a fresh directory beside DIR (.DIR.new-PID), every file
   // and the directory flushed to disk, then takes DIR's place in one atomic exchange

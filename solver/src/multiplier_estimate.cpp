@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "least_squares_multipliers.h"
 #include "program_steps.h"
-#include "raw_rows.h"
 
 namespace spacetime {
 
@@ -26,19 +26,14 @@ constexpr double kRegularisation = 1e-12;
 
 }  // namespace
 
-MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, int threads) {
-  MultiplierEstimate out;
-  const raw::Variables vars(problem.ceresProblem());
-  RawEvaluator evaluator(problem, vars, threads);
-  RawRows rows;
-  if (!evaluator.evaluate(&rows, true)) return out;
+Vec leastSquaresMultipliers(const RawEvaluator& evaluator, const RawRows& rows, MultiplierEstimate* out) {
   const raw::RowKinds kinds(evaluator);
   const Vec grad = raw::selectRows(rows.jacobian, kinds.objective).transpose() *
                    raw::selectValues(rows.values, kinds.objective);
   std::vector<int> held = kinds.equality;
   for (int r : kinds.inequality)
     if (rows.values[r] > -raw::kAtBound) held.push_back(r);
-  if (held.empty()) return out;
+  if (held.empty()) return Vec();
   std::sort(held.begin(), held.end());
 
   Vec y = Vec::Zero(evaluator.rows());
@@ -60,7 +55,7 @@ MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, in
     SpMat N = SpMat(JA * SpRow(JA.transpose()));
     for (int i = 0; i < N.outerSize(); ++i) N.coeffRef(i, i) += kRegularisation;
     Eigen::SimplicialLDLT<SpMat> ldlt(N);
-    if (ldlt.info() != Eigen::Success) return out;
+    if (ldlt.info() != Eigen::Success) return Vec();
     const Vec yA = scale.cwiseProduct(ldlt.solve(-(JA * grad)));
     y.setZero();
     std::vector<int> keep;
@@ -68,7 +63,7 @@ MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, in
       const int r = held[i];
       y[r] = yA[static_cast<Eigen::Index>(i)];
       if (evaluator.kind(r) == RowKind::Inequality && y[r] < 0) {
-        ++out.dropped;
+        ++out->dropped;
         y[r] = 0;
       } else {
         keep.push_back(r);
@@ -77,11 +72,23 @@ MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, in
     if (keep.size() == held.size()) break;
     held = keep;
   }
-  for (int r : kinds.inequality) out.active += y[r] > 0;
-  out.stationarity = (grad + SpMat(rows.jacobian.transpose()) * y).lpNorm<Eigen::Infinity>() /
-                     std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+  out->active = 0;
+  for (int r : kinds.inequality) out->active += y[r] > 0;
+  out->stationarity = (grad + SpMat(rows.jacobian.transpose()) * y).lpNorm<Eigen::Infinity>() /
+                      std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+  out->ok = true;
+  return y;
+}
+
+MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, int threads) {
+  MultiplierEstimate out;
+  const raw::Variables vars(problem.ceresProblem());
+  RawEvaluator evaluator(problem, vars, threads);
+  RawRows rows;
+  if (!evaluator.evaluate(&rows, true)) return out;
+  const Vec y = leastSquaresMultipliers(evaluator, rows, &out);
+  if (!out.ok) return out;
   raw::handOverMultipliers(evaluator, y, rows.values, rho, &problem.augmentedLagrangian());
-  out.ok = true;
   return out;
 }
 

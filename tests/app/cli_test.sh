@@ -18,6 +18,14 @@ for key in '"converged": true' '"reason"' '"objective"' '"iterations"' '"solve_s
   grep -q "$key" "$tmp/good/summary.json" || fail "summary.json lacks $key"
 done
 
+# --second-order: the particle's effort is a positive definite quadratic on the motions its pins
+# allow, so its optimum is a strict minimum; without the option summary.json has no verdict.
+grep -q '"second_order"' "$tmp/good/summary.json" && fail "second_order written without --second-order"
+"$cli" solve "$scenes/particle.json" --out "$tmp/second" --quiet --second-order 2>"$tmp/second.err" || fail "--second-order exited $?"
+grep -q "second order: a strict local minimum" "$tmp/second.err" || fail "--second-order printed no verdict: $(cat "$tmp/second.err")"
+python3 -c 'import json, sys; c = json.load(open(sys.argv[1]))["second_order"]; assert c["checked"] and c["strict_minimum"] and c["smallest_eigenvalue"] > 0 and c["free_directions"] > 0, c' \
+  "$tmp/second/summary.json" || fail "summary.json's second_order"
+
 # Each format at its own rate: motion.json dense for analysis (1000 Hz), the BVH at an animation
 # rate (the scene's, 24 fps: Blender's importer makes one frame of its default 24 fps scene of each BVH frame; at 1000 Hz a
 # 1.2 s jump became a 50 s action), glTF keys on a 24 Hz grid;

@@ -10,13 +10,16 @@
 #include "solver/animation.h"
 #include "solver/augmented_lagrangian.h"
 #include "solver/refinement.h"
+#include "solver/second_order.h"
 #include "solver/validity.h"
 
 namespace spacetime {
 
-// `attempts`: the transcriptions the solve ran on (solveRefined), written as `refinement`.
+// `attempts`: the transcriptions the solve ran on (solveRefined), written as `refinement`;
+// `secondOrder`: the second-order check of the motion when it was asked for, as `second_order`.
 std::string summaryJson(const SolverSummary& summary, const ValidityReport& validity,
-                        const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts = {});
+                        const SpacetimeProblem& problem, const std::vector<TranscriptionAttempt>& attempts = {},
+                        const SecondOrderCheck* secondOrder = nullptr);
 std::string motionJson(const Animation& animation);
 // The same motion as one CSV table for spreadsheets: a header row, then one row per frame with
 // the time and, per character and dof, `<character>.<dof>.q`, `.qd`, `.qdd`, `.tau`. Characters
@@ -54,6 +57,7 @@ struct OutputOptions {
 bool writeSolveOutputs(const SpacetimeProblem& problem, const SolverSummary& summary,
                        const ValidityReport& validity, const OutputOptions& options, const std::string& dir,
                        std::string* error, std::string* warning,
-                       const std::vector<TranscriptionAttempt>& attempts = {});
+                       const std::vector<TranscriptionAttempt>& attempts = {},
+                       const SecondOrderCheck* secondOrder = nullptr);
 
 }  // namespace spacetime
