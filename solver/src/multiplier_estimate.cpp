@@ -1,13 +1,14 @@
 // First-order multiplier estimate (see multiplier_estimate.h): the regularised least-squares
 // solution of J_A^T y = -grad f by the normal equations' sparse LDL^T, with the inequalities whose
-// multiplier comes out negative leaving A one round at a time.
+// multiplier comes out negative leaving A one round at a time; and the choice between those and
+// the augmented-Lagrangian state's own (kkt_multipliers.h).
 #include "solver/multiplier_estimate.h"
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <vector>
 
-#include "least_squares_multipliers.h"
+#include "kkt_multipliers.h"
 #include "program_steps.h"
 
 namespace spacetime {
@@ -78,6 +79,26 @@ Vec leastSquaresMultipliers(const RawEvaluator& evaluator, const RawRows& rows, 
                       std::max(1.0, grad.lpNorm<Eigen::Infinity>());
   out->ok = true;
   return y;
+}
+
+Vec stationaryMultipliers(SpacetimeProblem& problem, const RawEvaluator& evaluator, const RawRows& rows,
+                          MultiplierEstimate* out) {
+  Vec y = leastSquaresMultipliers(evaluator, rows, out);
+  if (!out->ok) return y;
+  const raw::RowKinds kinds(evaluator);
+  const Vec grad = raw::selectRows(rows.jacobian, kinds.objective).transpose() *
+                   raw::selectValues(rows.values, kinds.objective);
+  const AugmentedLagrangianState& al = problem.augmentedLagrangian();
+  Vec state = Vec::Zero(evaluator.rows());
+  for (int r = 0; r < evaluator.rows(); ++r)
+    if (evaluator.kind(r) != RowKind::Objective) state[r] = al.lambda[evaluator.multiplier(r)];
+  const double stationarity = (grad + SpMat(rows.jacobian.transpose()) * state).lpNorm<Eigen::Infinity>() /
+                              std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+  if (!(stationarity < out->stationarity)) return y;
+  out->stationarity = stationarity;
+  out->active = 0;
+  for (int r : kinds.inequality) out->active += state[r] > 0;
+  return state;
 }
 
 MultiplierEstimate estimateMultipliers(SpacetimeProblem& problem, double rho, int threads) {

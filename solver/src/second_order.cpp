@@ -11,7 +11,7 @@
 #include <sstream>
 #include <vector>
 
-#include "least_squares_multipliers.h"
+#include "kkt_multipliers.h"
 #include "program_steps.h"
 #include "solver/variable_labels.h"
 
@@ -57,10 +57,8 @@ SecondOrderCheck checkSecondOrder(SpacetimeProblem& problem, int threads) {
   if (evaluator.anyMoving()) return finish("not run: a residual moves with a free contact end");
   RawRows rows;
   if (!evaluator.evaluate(&rows, true)) return finish("not run: a row is not finite");
-  // The least-squares multipliers. The augmented-Lagrangian state's lambda + rho c was tried as
-  // well: at the jump's optimum it meets stationarity to 1.8e-4 against their 2.7e-6.
   MultiplierEstimate estimate;
-  const Vec y = leastSquaresMultipliers(evaluator, rows, &estimate);
+  const Vec y = stationaryMultipliers(problem, evaluator, rows, &estimate);
   if (!estimate.ok) return finish("not run: no constraint row, or the multipliers could not be estimated");
   out.stationarity = estimate.stationarity;
 
@@ -133,7 +131,7 @@ SecondOrderCheck checkSecondOrder(SpacetimeProblem& problem, int threads) {
   out.strictMinimum = out.smallestEigenvalue > out.roundingFloor;
   if (!out.strictMinimum) {
     // The direction of least curvature, by the variables it moves most (its vectors only now: the
-    // humanoid's 1997 free directions take seconds more with them).
+    // humanoid's 2005 free directions take seconds more with them).
     eigen.compute(0.5 * (reduced + reduced.transpose()), Eigen::ComputeEigenvectors);
     const Vec direction = Z * eigen.eigenvectors().col(0);
     std::vector<int> variable(static_cast<size_t>(n), -1);  // tangent column -> index into the variables

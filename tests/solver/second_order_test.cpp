@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "../../solver/src/least_squares_multipliers.h"
+#include "../../solver/src/kkt_multipliers.h"
 #include "../../solver/src/program_steps.h"
 #include "../shipped_scene.h"
 #include "solver/augmented_lagrangian.h"
@@ -115,7 +115,7 @@ TEST(SecondOrder, TheJumpsReducedHessianMatchesADenseNullSpace) {
   raw::RawRows rows;
   ASSERT_TRUE(evaluator.evaluate(&rows, true));
   MultiplierEstimate estimate;
-  const Eigen::VectorXd y = leastSquaresMultipliers(evaluator, rows, &estimate);
+  const Eigen::VectorXd y = stationaryMultipliers(*problem, evaluator, rows, &estimate);
   ASSERT_TRUE(estimate.ok);
   const int n = vars.tangent;
   const double largest = std::max(1.0, y.lpNorm<Eigen::Infinity>());

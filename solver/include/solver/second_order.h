@@ -50,7 +50,8 @@ struct SecondOrderCheck {
   std::string reason;
 };
 
-// Checks the problem's current motion with its least-squares multipliers (multiplier_estimate.h).
+// Checks the problem's current motion with its solver's multipliers or its least-squares ones
+// (multiplier_estimate.h), whichever meet stationarity better.
 // Meaningful at a KKT point (a converged solve); it changes nothing in the problem.
 SecondOrderCheck checkSecondOrder(SpacetimeProblem& problem, int threads);
 
