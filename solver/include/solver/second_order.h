@@ -15,7 +15,7 @@
 // down on the variables W has no curvature for (the anchors).
 //
 // Two methods that end at different objectives on one scene each reach a KKT point; the check
-// says whether both are strict local minima (two basins of one problem, docs/validation.md) or
+// says whether both are strict local minima (two basins of one problem, docs/design.md) or
 // one of them is not a minimum at all.
 #pragma once
 
@@ -32,8 +32,9 @@ struct SecondOrderCheck {
   // The reduced Hessian's extreme eigenvalues, in the solver's variables (infinite smallest when the
   // active constraints leave no free direction).
   double smallestEigenvalue = 0, largestEigenvalue = 0;
-  // Eigenvalues within this of zero are zero to rounding: strict needs smallestEigenvalue above it,
-  // and below minus it the point is a saddle, not a minimum.
+  // Eigenvalues within this of zero are zero to rounding: strict needs smallestEigenvalue above it;
+  // below minus it the reduced Hessian is indefinite (a saddle when `dependent` and `weaklyActive`
+  // are zero).
   double roundingFloor = 0;
   int nullity = 0;  // free directions: n - rank(A)
   // Not strict: the variables the direction of least curvature moves most (variable_labels.h).
