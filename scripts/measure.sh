@@ -193,7 +193,9 @@ c = s.get("second_order", {})
 if not c.get("checked"):
     print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6f} | {c.get('reason', 'not run')} | | | | | | |")
     sys.exit()
-verdict = "strict minimum" if c["strict_minimum"] else "saddle" if "saddle" in c["reason"] else "not shown" if c["smallest_eigenvalue"] < -c["rounding_floor"] else "flat"
+verdict = ("strict minimum" if c["strict_minimum"] else
+           f"strict motion, {c['free_force_directions']} free force directions" if c["strict_motion"] else
+           "saddle" if "saddle" in c["reason"] else "not shown" if c["smallest_eigenvalue"] < -c["rounding_floor"] else "flat")
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['objective']:.6f} | {verdict} | {c['smallest_eigenvalue']:.3g} | {c['free_directions']} | "
       f"{c['active_constraints']} ({c['dependent_constraints']}) | {c['stationarity']:.2g} | {c['seconds']:.3f} | {'; '.join(c['direction'][:2])} |")
 PY

@@ -104,6 +104,8 @@ std::string summaryJson(const SolverSummary& s, const ValidityReport& v,
     auto number = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
     j["second_order"] = {{"checked", c.checked},
                          {"strict_minimum", c.strictMinimum},
+                         {"strict_motion", c.strictMinimum || c.strictMotion},
+                         {"free_force_directions", c.freeForceDirections},
                          {"smallest_eigenvalue", number(c.smallestEigenvalue)},
                          {"largest_eigenvalue", number(c.largestEigenvalue)},
                          {"rounding_floor", c.roundingFloor},

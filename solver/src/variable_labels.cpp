@@ -70,4 +70,12 @@ std::string describeVariable(const SpacetimeProblem& problem, int index) {
   return "variable " + std::to_string(index);
 }
 
+bool isContactForce(const SpacetimeProblem& problem, int index) {
+  for (const ContactVariables& ct : problem.contacts()) {
+    if (index >= ct.forceOffset && index < ct.forceOffset + ct.blockSize() * static_cast<int>(ct.times.size())) return true;
+    if (ct.impact() && index >= ct.impulseOffset && index < ct.impulseOffset + ct.pointForceSize()) return true;
+  }
+  return false;
+}
+
 }  // namespace spacetime

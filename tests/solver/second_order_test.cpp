@@ -3,9 +3,10 @@
 // midpoint, so the nearest point of the circle is a strict minimum, the farthest a saddle, and a
 // circle centred on that midpoint a family of equally good motions (a flat direction); the jump's
 // reduced Hessian against a dense null space of its active constraints (singular value
-// decomposition instead of sparse QR); and the hurdle's two optima - the augmented Lagrangian's
+// decomposition instead of sparse QR); the hurdle's two optima - the augmented Lagrangian's
 // and `sqp`'s - each a strict local minimum, so the methods' different objectives there are two
-// basins of one problem, not a failure of either.
+// basins of one problem, not a failure of either; and the 3D lamp, whose flat directions move
+// contact forces only, so its motion is a strict minimum while its forces are not decided.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -95,6 +96,28 @@ TEST(SecondOrder, OnACircleTheNearestPointIsAMinimumTheFarthestASaddleAndACentre
   EXPECT_LT(flat.stationarity, 1e-9);
   EXPECT_FALSE(flat.strictMinimum) << flat.reason;
   EXPECT_LE(std::abs(flat.smallestEigenvalue), flat.roundingFloor) << flat.reason;
+  EXPECT_FALSE(flat.strictMotion) << "the flat direction moves the particle, not a force: " << flat.reason;
+}
+
+// The 3D lamp's base stands on four points, so its load is statically indeterminate; where the
+// load-sharing term has no weight (samples of zero quadrature weight) nothing decides the split,
+// and those directions are flat - but they move contact forces only, so the motion itself is
+// still a strict minimum.
+TEST(SecondOrder, The3DLampsMotionIsStrictThoughSomeOfItsForcesAreFree) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_3d.json"), &error);
+  ASSERT_TRUE(problem) << error;
+  SolverOptions options;
+  options.threads = 2;
+  ASSERT_TRUE(solveSpacetime(*problem, options).converged);
+  const SecondOrderCheck check = checkSecondOrder(*problem, 2);
+  ASSERT_TRUE(check.checked) << check.reason;
+  EXPECT_FALSE(check.strictMinimum) << check.reason;
+  EXPECT_TRUE(check.strictMotion) << check.reason;
+  EXPECT_GT(check.freeForceDirections, 0);
+  EXPECT_GT(check.motionEigenvalue, check.roundingFloor);
+  ASSERT_FALSE(check.direction.empty());
+  EXPECT_NE(check.direction.front().find("force"), std::string::npos) << check.direction.front();
 }
 
 // The same reduced Hessian from a dense orthonormal basis of null(A) (the right singular vectors

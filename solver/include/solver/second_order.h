@@ -37,6 +37,12 @@ struct SecondOrderCheck {
   // are zero).
   double roundingFloor = 0;
   int nullity = 0;  // free directions: n - rank(A)
+  // Not strict, but every flat direction moves contact forces only (a sample's force split
+  // between points or feet that no term decides): the motion itself is then a strict local
+  // minimum, curved by at least motionEigenvalue along any direction that moves it.
+  bool strictMotion = false;
+  int freeForceDirections = 0;
+  double motionEigenvalue = 0;
   // Not strict: the variables the direction of least curvature moves most (variable_labels.h).
   std::vector<std::string> direction;
   double stationarity = 0;  // |grad f + J^T y|_inf / max(1, |grad f|_inf) at the multipliers used
