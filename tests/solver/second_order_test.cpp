@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,18 @@ SecondOrderCheck checkOnCircle(double c, double r, const Eigen::Vector3d& point)
   return checkSecondOrder(*circle, 1);
 }
 
+// A shipped scene's problem, solved from the default guess (2 threads) to convergence.
+std::unique_ptr<SpacetimeProblem> solvedShipped(const std::string& name) {
+  std::string error;
+  auto problem = SpacetimeProblem::build(testing::shippedScene(name), &error);
+  EXPECT_TRUE(problem) << error;
+  if (!problem) return problem;
+  SolverOptions options;
+  options.threads = 2;
+  EXPECT_TRUE(solveSpacetime(*problem, options).converged) << name;
+  return problem;
+}
+
 TEST(SecondOrder, OnACircleTheNearestPointIsAMinimumTheFarthestASaddleAndACentredCircleIsFlat) {
   // Circle of radius 0.5 about y = 0.3: the midpoint (0, 0, 0) lies inside it, nearest to y = -0.2
   // and farthest from y = 0.8. Along the circle the effort c0 |p|^2 has curvature 2 c0 + 2 lambda
@@ -104,12 +117,8 @@ TEST(SecondOrder, OnACircleTheNearestPointIsAMinimumTheFarthestASaddleAndACentre
 // and those directions are flat - but they move contact forces only, so the motion itself is
 // still a strict minimum.
 TEST(SecondOrder, The3DLampsMotionIsStrictThoughSomeOfItsForcesAreFree) {
-  std::string error;
-  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_3d.json"), &error);
-  ASSERT_TRUE(problem) << error;
-  SolverOptions options;
-  options.threads = 2;
-  ASSERT_TRUE(solveSpacetime(*problem, options).converged);
+  auto problem = solvedShipped("luxo_3d.json");
+  ASSERT_TRUE(problem);
   const SecondOrderCheck check = checkSecondOrder(*problem, 2);
   ASSERT_TRUE(check.checked) << check.reason;
   EXPECT_FALSE(check.strictMinimum) << check.reason;
@@ -123,12 +132,8 @@ TEST(SecondOrder, The3DLampsMotionIsStrictThoughSomeOfItsForcesAreFree) {
 // The same reduced Hessian from a dense orthonormal basis of null(A) (the right singular vectors
 // of A beyond its numerical rank): the same number of free directions and the same eigenvalues.
 TEST(SecondOrder, TheJumpsReducedHessianMatchesADenseNullSpace) {
-  std::string error;
-  auto problem = SpacetimeProblem::build(testing::shippedScene("luxo_jump.json"), &error);
-  ASSERT_TRUE(problem) << error;
-  SolverOptions options;
-  options.threads = 2;
-  ASSERT_TRUE(solveSpacetime(*problem, options).converged);
+  auto problem = solvedShipped("luxo_jump.json");
+  ASSERT_TRUE(problem);
   const SecondOrderCheck check = checkSecondOrder(*problem, 2);
   ASSERT_TRUE(check.checked) << check.reason;
   EXPECT_TRUE(check.strictMinimum) << check.reason;
