@@ -43,7 +43,7 @@ constexpr double kNamedShare = 0.2;
 // A flat direction moves "contact forces only" when its largest component on any other variable
 // is below this share of its largest component: the 3D lamp's 612 flat directions move the
 // motion by 1e-12 of that, the quadruped's 3 by 3e-7; the biped's 20 smallest curvatures, all
-// under its floor, by up to 1.1e-3 (some are the motion's own, and it stays "not shown").
+// under its floor, by up to 1.1e-3 (not forces only: it stays "not shown").
 constexpr double kMotionShare = 1e-5;
 
 }  // namespace
