@@ -152,8 +152,12 @@ SecondOrderCheck checkSecondOrder(SpacetimeProblem& problem, int threads) {
       int flat = 0;
       while (flat < out.nullity && eigen.eigenvalues()[flat] <= out.roundingFloor) ++flat;
       bool forcesOnly = flat < out.nullity;
+      // The flat directions in the variables, in one product: one column at a time read Z from
+      // memory once per direction (the humanoid's check, resumed at its optimum: 20.5 s, against
+      // 17.2 s in one product).
+      const Eigen::MatrixXd flats = Z * eigen.eigenvectors().leftCols(flat);
       for (int k = 0; k < flat && forcesOnly; ++k) {
-        const Vec d = Z * eigen.eigenvectors().col(k);
+        const Vec d = flats.col(k);
         double motion = 0;
         for (int c = 0; c < n; ++c)
           if (variable[static_cast<size_t>(c)] < 0 || !isContactForce(problem, variable[static_cast<size_t>(c)]))
