@@ -25,12 +25,22 @@ constexpr int kMaxRounds = 20;
 // On the scaled normal equations' unit diagonal.
 constexpr double kRegularisation = 1e-12;
 
+// The objective's gradient J_r^T r.
+Vec objectiveGradient(const raw::RowKinds& kinds, const RawRows& rows) {
+  return raw::selectRows(rows.jacobian, kinds.objective).transpose() * raw::selectValues(rows.values, kinds.objective);
+}
+
+// |grad f + J^T y|_inf / max(1, |grad f|_inf): how far multipliers y are from stationarity.
+double stationarityOf(const Vec& grad, const RawRows& rows, const Vec& y) {
+  return (grad + SpMat(rows.jacobian.transpose()) * y).lpNorm<Eigen::Infinity>() /
+         std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+}
+
 }  // namespace
 
 Vec leastSquaresMultipliers(const RawEvaluator& evaluator, const RawRows& rows, MultiplierEstimate* out) {
   const raw::RowKinds kinds(evaluator);
-  const Vec grad = raw::selectRows(rows.jacobian, kinds.objective).transpose() *
-                   raw::selectValues(rows.values, kinds.objective);
+  const Vec grad = objectiveGradient(kinds, rows);
   std::vector<int> held = kinds.equality;
   for (int r : kinds.inequality)
     if (rows.values[r] > -raw::kAtBound) held.push_back(r);
@@ -75,8 +85,7 @@ Vec leastSquaresMultipliers(const RawEvaluator& evaluator, const RawRows& rows, 
   }
   out->active = 0;
   for (int r : kinds.inequality) out->active += y[r] > 0;
-  out->stationarity = (grad + SpMat(rows.jacobian.transpose()) * y).lpNorm<Eigen::Infinity>() /
-                      std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+  out->stationarity = stationarityOf(grad, rows, y);
   out->ok = true;
   return y;
 }
@@ -86,14 +95,11 @@ Vec stationaryMultipliers(SpacetimeProblem& problem, const RawEvaluator& evaluat
   Vec y = leastSquaresMultipliers(evaluator, rows, out);
   if (!out->ok) return y;
   const raw::RowKinds kinds(evaluator);
-  const Vec grad = raw::selectRows(rows.jacobian, kinds.objective).transpose() *
-                   raw::selectValues(rows.values, kinds.objective);
   const AugmentedLagrangianState& al = problem.augmentedLagrangian();
   Vec state = Vec::Zero(evaluator.rows());
   for (int r = 0; r < evaluator.rows(); ++r)
     if (evaluator.kind(r) != RowKind::Objective) state[r] = al.lambda[evaluator.multiplier(r)];
-  const double stationarity = (grad + SpMat(rows.jacobian.transpose()) * state).lpNorm<Eigen::Infinity>() /
-                              std::max(1.0, grad.lpNorm<Eigen::Infinity>());
+  const double stationarity = stationarityOf(objectiveGradient(kinds, rows), rows, state);
   if (!(stationarity < out->stationarity)) return y;
   out->stationarity = stationarity;
   out->active = 0;
