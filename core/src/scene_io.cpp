@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -190,7 +191,11 @@ JointSpec readJoint(const Reader& r, const json& j, const std::string& path) {
     // normalising by it gave [0, 0, 0].
     const double largest = js.axis.cwiseAbs().maxCoeff();
     if (!(largest > 1e-9)) r.badValue(Reader::join(path, "axis"), j["axis"], "a non-zero vector");
-    js.axis = (js.axis / largest).normalized();
+    // An axis of unit length to rounding is kept as written: normalising it again can move its
+    // last bit ([5, 0, 2] normalised, saved and reopened: 0.9284766908852592 became ...594), and a
+    // saved scene must reopen as it was saved.
+    if (!(std::abs(js.axis.norm() - 1) <= 4 * std::numeric_limits<double>::epsilon()))
+      js.axis = (js.axis / largest).normalized();
   }
   if (j.contains("origin")) js.origin = r.vec3(j["origin"], Reader::join(path, "origin"));
   if (j.contains("rpy")) js.rpy = r.vec3(j["rpy"], Reader::join(path, "rpy"));

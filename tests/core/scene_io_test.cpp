@@ -120,6 +120,28 @@ TEST(SceneIo, HugeJointAxisIsRefusedOrNormalised) {
   EXPECT_TRUE(again.scene) << again.error;
 }
 
+// A joint axis is normalised when loaded, and a saved scene reopens as it was saved: the axis
+// written is kept, not normalised again (that moved [5, 0, 2]'s last bits, which the loader's
+// fuzzer found: the reopened scene saved differently).
+TEST(SceneIo, ANormalisedJointAxisReopensUnchanged) {
+  std::ifstream in(kScenes + "luxo_jump.json");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::regex firstJointAxis(R"("axis": \[\s*0,\s*0,\s*1\s*\])");
+  const std::string text = buffer.str();
+  ASSERT_TRUE(std::regex_search(text, firstJointAxis));
+  for (const char* axis : {R"("axis": [5, 0, 2])", R"("axis": [1, 1, 1])", R"("axis": [0.3, -7, 2.5])", R"("axis": [3e8, 1, 1e-3])"}) {
+    const SceneLoadResult loaded =
+        parseScene(std::regex_replace(text, firstJointAxis, axis, std::regex_constants::format_first_only), "axis.json");
+    ASSERT_TRUE(loaded.scene) << loaded.error;
+    EXPECT_NEAR(loaded.scene->characters[0].bodies[1].joint.axis.norm(), 1, 1e-15) << axis;
+    const std::string saved = sceneToJson(*loaded.scene);
+    const SceneLoadResult reopened = parseScene(saved, "saved.json");
+    ASSERT_TRUE(reopened.scene) << reopened.error;
+    EXPECT_EQ(sceneToJson(*reopened.scene), saved) << axis;
+  }
+}
+
 TEST(SceneIo, AtomicSaveThenLoad) {
   const SceneLoadResult r = loadSceneFile(kScenes + "luxo_jump.json");
   ASSERT_TRUE(r.scene) << r.error;
