@@ -6,7 +6,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "program_steps.h"
 #include "solver/quadratic_program.h"
@@ -82,6 +85,34 @@ std::string toShortString(double v) {
   return text;
 }
 
+// Where the steps stop with the last program elastic: the terms whose rows hold its slacks
+// (`slacks`: problem row, slack), most first, at most three, as "; its last program left 0.0546
+// of the violation unmet, on LABEL (0.0187), ...". Those are the rows the linearised constraints
+// cannot meet together there: on the ladder's long rungs at the scene's transcription, the start
+// and end keys' base x and the landing impact's horizontal row (docs/design.md, SQP).
+std::string describeSlacks(const RawEvaluator& evaluator, const std::vector<std::pair<int, double>>& slacks,
+                           double tolerance) {
+  double total = 0;
+  std::map<size_t, double> byTerm;  // term index -> its rows' slacks
+  std::vector<int> first;
+  for (size_t t = 0; t < evaluator.terms().size(); ++t) first.push_back(evaluator.firstRow(t));
+  for (const auto& [row, slack] : slacks) {
+    total += slack;
+    const size_t term = static_cast<size_t>(std::upper_bound(first.begin(), first.end(), row) - first.begin()) - 1;
+    byTerm[term] += slack;
+  }
+  if (!(total > tolerance)) return "";
+  std::vector<std::pair<double, size_t>> order;
+  for (const auto& [term, slack] : byTerm) order.emplace_back(slack, term);
+  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::string out = "; its last program left " + toShortString(total) + " of the violation unmet, on ";
+  for (size_t i = 0; i < order.size() && i < 3 && order[i].first > std::max(tolerance, 0.01 * total); ++i) {
+    const TermResidual* term = evaluator.terms()[order[i].second];
+    out += (i ? ", " : "") + (term ? term->kernel().label() : std::string("a row")) + " (" + toShortString(order[i].first) + ")";
+  }
+  return out;
+}
+
 struct Merit {
   double f = 0;          // 1/2 |r|^2
   double violation = 0;  // largest row: |c|, max(0, g)
@@ -138,6 +169,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   double lastReport = 0;
   QpWorkspace hardWorkspace, elasticWorkspace;  // the two programs' patterns differ
   std::string why;
+  std::vector<std::pair<int, double>> lastSlacks;  // the last elastic program's: problem row, slack
   bool done = false;
   auto handOverMultipliers = [&](double rho, const Vec& values) {
     raw::handOverMultipliers(evaluator, y, values, rho, &state);
@@ -338,6 +370,9 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
         }
       }
       elasticSum = hard ? 0.0 : qp.x.tail(2 * pe + ke).sum();
+      lastSlacks.clear();
+      for (int i = 0; i < pe; ++i) lastSlacks.emplace_back(equality[i], qp.x[n + i] + qp.x[n + pe + i]);
+      for (int j = 0; j < ke; ++j) lastSlacks.emplace_back(heldRows[elastic[j]], qp.x[n + 2 * pe + j]);
       // Rows outside the program the step crosses join it, and it is solved again.
       const Vec linear = g + Cfull * qp.x.head(n);
       if (raw::holdCrossedRows(linear, &held)) {
@@ -458,6 +493,7 @@ SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options, 
   fallback.method = SolverMethod::Sqp;
   raw::addPhaseTo(summary, &fallback);
   fallback.reason = "the SQP stopped after " + std::to_string(summary.sqpSteps) + " steps (" + why +
+                    describeSlacks(evaluator, lastSlacks, options.tolerance) +
                     "); the augmented Lagrangian from the starting motion: " + fallback.reason;
   fallback.solveSeconds = secondsSince(start);
   return fallback;

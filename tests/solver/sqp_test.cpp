@@ -187,15 +187,20 @@ TEST(Sqp, ThePowerFormulaScenesStepsHandOverToTheAugmentedLagrangian) {
   expectHandOver("luxo_power_formula.json", "steps in a row", 30, 3980.4512, 1e-2);
 }
 
-// Two pins at one instant in two places: the programs cannot meet both, the SQP hands over, and
-// the augmented Lagrangian stalls, says the constraints conflict and names the two pins.
+// Two pins at one instant in two places: the programs cannot meet both, the SQP hands over
+// saying which pin its last (elastic) program left unmet, and the augmented Lagrangian stalls,
+// says the constraints conflict and names the two pins.
 TEST(Sqp, ContradictoryPinsAreNamed) {
   Scene scene = testing::shippedScene("particle.json");
   testing::addClashingPin(scene);
   std::string error;
   auto problem = SpacetimeProblem::build(scene, &error);
   ASSERT_TRUE(problem) << error;
-  testing::expectTheClashNamed(solveSpacetime(*problem, sqp()), *problem, scene, "the SQP stopped");
+  const SolverSummary s = solveSpacetime(*problem, sqp());
+  testing::expectTheClashNamed(s, *problem, scene, "the SQP stopped");
+  const size_t unmet = s.reason.find("of the violation unmet, on pin '");
+  ASSERT_NE(unmet, std::string::npos) << s.reason;
+  EXPECT_LT(unmet, s.reason.find("the augmented Lagrangian")) << s.reason;  // in the SQP's own part
 }
 
 }  // namespace
