@@ -87,9 +87,10 @@ std::string toShortString(double v) {
 
 // Where the steps stop with the last program elastic: the terms whose rows hold its slacks
 // (`slacks`: problem row, slack), most first, at most three, as "; its last program left 0.0546
-// of the violation unmet, on LABEL (0.0187), ...". Those are the rows the linearised constraints
-// cannot meet together there: on the ladder's long rungs at the scene's transcription, the start
-// and end keys' base x and the landing impact's horizontal row (docs/design.md, SQP).
+// of the violation unmet, on LABEL (0.0187), ...": the rows the linearised constraints could not
+// meet there (two contradictory pins: the pin the program gives up; the ladder's long rungs'
+// creeping steps: the start and end keys' base x and the landing impact's horizontal row,
+// docs/design.md, SQP).
 std::string describeSlacks(const RawEvaluator& evaluator, const std::vector<std::pair<int, double>>& slacks,
                            double tolerance) {
   double total = 0;
