@@ -14,6 +14,26 @@ namespace {
 
 const std::string kScenes = std::string(SPACETIME_SOURCE_DIR) + "/resources/scenes/";
 
+// The shipped jump's file as text, and its first joint's axis ([0, 0, 1]) in it.
+const std::string& jumpText() {
+  static const std::string text = [] {
+    std::ifstream in(kScenes + "luxo_jump.json");
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    return buffer.str();
+  }();
+  return text;
+}
+const std::regex& firstJointAxis() {
+  static const std::regex axis(R"("axis": \[\s*0,\s*0,\s*1\s*\])");
+  return axis;
+}
+// The shipped jump parsed with its first joint's axis written as `axis`, e.g. R"("axis": [5, 0, 2])".
+SceneLoadResult jumpWithFirstAxis(const char* axis) {
+  return parseScene(std::regex_replace(jumpText(), firstJointAxis(), axis, std::regex_constants::format_first_only),
+                    "axis.json");
+}
+
 TEST(SceneIo, ShippedScenesLoadAndRoundTrip) {
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(kScenes)) {
@@ -99,20 +119,12 @@ TEST(SceneIo, SolverMethodFrameRateLegBubblesAndKnotsRoundTrip) {
 // squared norm overflowed a double and it became [0, 0, 0]: the solve failed and the saved file
 // would not load again); a large one within the bound normalises to its direction.
 TEST(SceneIo, HugeJointAxisIsRefusedOrNormalised) {
-  std::ifstream in(kScenes + "luxo_jump.json");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::regex firstJointAxis(R"("axis": \[\s*0,\s*0,\s*1\s*\])");
-  const std::string text = buffer.str();
-  ASSERT_TRUE(std::regex_search(text, firstJointAxis));
-  auto withAxis = [&](const char* axis) {
-    return parseScene(std::regex_replace(text, firstJointAxis, axis, std::regex_constants::format_first_only), "axis.json");
-  };
-  const SceneLoadResult huge = withAxis(R"("axis": [0, 3e200, 4e200])");
+  ASSERT_TRUE(std::regex_search(jumpText(), firstJointAxis()));
+  const SceneLoadResult huge = jumpWithFirstAxis(R"("axis": [0, 3e200, 4e200])");
   ASSERT_FALSE(huge.scene);
   EXPECT_NE(huge.error.find("axis.json: field 'characters[0].bodies[1].joint.axis[1]'"), std::string::npos) << huge.error;
   EXPECT_NE(huge.error.find("magnitude at most 1e9"), std::string::npos) << huge.error;
-  const SceneLoadResult large = withAxis(R"("axis": [0, 3e8, 4e8])");
+  const SceneLoadResult large = jumpWithFirstAxis(R"("axis": [0, 3e8, 4e8])");
   ASSERT_TRUE(large.scene) << large.error;
   const Eigen::Vector3d a = large.scene->characters[0].bodies[1].joint.axis;
   EXPECT_NEAR((a - Eigen::Vector3d(0, 0.6, 0.8)).norm(), 0, 1e-15);
@@ -124,15 +136,9 @@ TEST(SceneIo, HugeJointAxisIsRefusedOrNormalised) {
 // written is kept, not normalised again (that moved [5, 0, 2]'s last bits, which the loader's
 // fuzzer found: the reopened scene saved differently).
 TEST(SceneIo, ANormalisedJointAxisReopensUnchanged) {
-  std::ifstream in(kScenes + "luxo_jump.json");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::regex firstJointAxis(R"("axis": \[\s*0,\s*0,\s*1\s*\])");
-  const std::string text = buffer.str();
-  ASSERT_TRUE(std::regex_search(text, firstJointAxis));
+  ASSERT_TRUE(std::regex_search(jumpText(), firstJointAxis()));
   for (const char* axis : {R"("axis": [5, 0, 2])", R"("axis": [1, 1, 1])", R"("axis": [0.3, -7, 2.5])", R"("axis": [3e8, 1, 1e-3])"}) {
-    const SceneLoadResult loaded =
-        parseScene(std::regex_replace(text, firstJointAxis, axis, std::regex_constants::format_first_only), "axis.json");
+    const SceneLoadResult loaded = jumpWithFirstAxis(axis);
     ASSERT_TRUE(loaded.scene) << loaded.error;
     EXPECT_NEAR(loaded.scene->characters[0].bodies[1].joint.axis.norm(), 1, 1e-15) << axis;
     const std::string saved = sceneToJson(*loaded.scene);
