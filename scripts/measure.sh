@@ -13,6 +13,7 @@
 #   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
 #   scripts/measure.sh speedlimits the jump under joint speed limits only (about 10 minutes)
 #   scripts/measure.sh motionstarts solves started from a motion.json alone only (about 2 minutes)
+#   scripts/measure.sh scaling    the scaling rows only, by the scene's method and by sqp
 #   scripts/measure.sh secondorder the second-order check of every shipped scene's optimum, and of
 #                                 each method's on the hurdle and the 0.3 m rung (about 3 minutes)
 set -euo pipefail
@@ -21,6 +22,52 @@ cmake --build build -j2 --target solve_benchmark expr_benchmark editor_benchmark
 bench=build/tests/benchmarks
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+
+# The Scaling rows (the scene's method, `al`) and the ScalingSqp rows (the same scenes by `sqp`),
+# each with the least-squares exponents of time, steps and time per step over its valid rows.
+scaling_tables() {
+  for rows in Scaling ScalingSqp; do
+    echo
+    echo "## $rows (solve_benchmark's $rows rows, 2 threads, single runs)"
+    echo
+    "$bench/solve_benchmark" --benchmark_filter="BM_$rows/" --benchmark_format=json \
+      --benchmark_out="$tmp/$rows.json" --benchmark_out_format=json > /dev/null
+    python3 - "$tmp/$rows.json" "$rows" <<'PY'
+import json, math, sys
+rows = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("run_type") == "iteration"]
+sqp = sys.argv[2] == "ScalingSqp"
+def steps(b):  # the method's own steps: the SQP's, or the augmented Lagrangian's LM iterations
+    return b.get("sqp_steps", 0) if sqp else b["lm_iterations"]
+def per_step(b):
+    return b.get("sqp_ms_per_step", 0) if sqp else b.get("lm_ms_per_iteration", 0)
+kind = "SQP steps" if sqp else "LM iterations"
+print(f"| scene | clip | dofs | time | {kind} + Newton steps | ms per {kind[:-1]} | LM iterations after a hand-over | transcriptions | objective | valid |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for b in rows:
+    name = b["run_name"].split("/")[1]
+    s = b["real_time"] / 1e3
+    first = steps(b)
+    after = f"{b['lm_iterations']:.0f}" if sqp else "-"
+    print(f"| {name} | {b['clip_seconds']:.1f} s | {b['dofs']:.0f} | {s:.3g} s | {first:.0f} + {b['newton_steps']:.0f} | "
+          f"{per_step(b):.2f} | {after} | {b['transcriptions']:.0f} | {b['objective']:.4f} | {'yes' if b['valid'] else 'no'} |")
+def slope(points):  # least-squares exponent of y = c x^a
+    xs = [math.log(x) for x, _ in points]; ys = [math.log(y) for _, y in points]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+for family, key in (("hops", "clip_seconds"), ("chain", "dofs")):
+    sel = [b for b in rows if f"/{family}_" in b["run_name"] and b["valid"]]
+    if len(sel) < 2:
+        continue
+    t = slope([(b[key], b["real_time"]) for b in sel])
+    its = slope([(b[key], steps(b)) for b in sel])
+    line = f"\n{family} (valid rows): time ~ {key}^{t:.2f}, {kind} ~ {key}^{its:.2f}"
+    if all(per_step(b) > 0 for b in sel):
+        line += f", ms per {kind[:-1]} ~ {key}^{slope([(b[key], per_step(b)) for b in sel]):.2f}"
+    print(line)
+PY
+  done
+}
+[ "${1:-}" = scaling ] && { scaling_tables; exit 0; }
 
 # The methods side by side: every shipped scene, then the ladder's required rungs (al's own
 # figures are in the ladder table above).
@@ -291,34 +338,7 @@ PY
 editor_solves
 speed_limits
 
-echo
-echo "## Scaling (solve_benchmark's Scaling rows, 2 threads, single runs)"
-echo
-"$bench/solve_benchmark" --benchmark_filter=Scaling --benchmark_format=json \
-  --benchmark_out="$tmp/scaling.json" --benchmark_out_format=json > /dev/null
-python3 - "$tmp/scaling.json" <<'PY'
-import json, math, sys
-rows = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("run_type") == "iteration"]
-print("| scene | clip | dofs | time | LM iterations + Newton steps | ms per LM iteration | transcriptions | valid |")
-print("|---|---|---|---|---|---|---|---|")
-for b in rows:
-    name = b["run_name"].replace("BM_Scaling/", "").split("/")[0]
-    s = b["real_time"] / 1e3
-    print(f"| {name} | {b['clip_seconds']:.1f} s | {b['dofs']:.0f} | {s:.3g} s | {b['lm_iterations']:.0f} + {b['newton_steps']:.0f} | "
-          f"{b.get('lm_ms_per_iteration', 0):.2f} | {b['transcriptions']:.0f} | {'yes' if b['valid'] else 'no'} |")
-def slope(points):  # least-squares exponent of y = c x^a
-    xs = [math.log(x) for x, _ in points]; ys = [math.log(y) for _, y in points]
-    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
-    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
-for kind, key in (("hops", "clip_seconds"), ("chain", "dofs")):
-    sel = [b for b in rows if f"/{kind}_" in b["run_name"] and b["valid"]]
-    if len(sel) < 2:
-        continue
-    t = slope([(b[key], b["real_time"]) for b in sel])
-    per = slope([(b[key], b["lm_ms_per_iteration"]) for b in sel])
-    its = slope([(b[key], b["lm_iterations"] + b["newton_steps"]) for b in sel])
-    print(f"\n{kind} (valid rows): time ~ {key}^{t:.2f}, iterations ~ {key}^{its:.2f}, ms per LM iteration ~ {key}^{per:.2f}")
-PY
+scaling_tables
 
 echo
 echo "## The jump ladder (spacetime-cli solve, 2 threads, single runs)"

@@ -10,6 +10,8 @@
 #include <ceres/crs_matrix.h>
 #include <ceres/problem.h>
 
+#include <optional>
+
 #include "../../solver/src/program_steps.h"
 #include "../../solver/src/raw_rows.h"
 #include "../shipped_scene.h"
@@ -135,8 +137,10 @@ void BM_LuxoWarmResolve(benchmark::State& state, bool polish, double move = 0.02
 
 // A scene kept for tests (tests/scenes/PATH) solved as spacetime-cli solves it: 2 threads,
 // refining the transcription until the motion passes the validity report. Reports the clip's
-// length and the characters' dofs, which the scaling rows relate the time to.
-void solveAsTheCli(benchmark::State& state, const std::string& path, double maxSeconds) {
+// length and the characters' dofs, which the scaling rows relate the time to. `method`, if given,
+// replaces the scene's (spacetime-cli solve --method).
+void solveAsTheCli(benchmark::State& state, const std::string& path, double maxSeconds,
+                   std::optional<SolverMethod> method = std::nullopt) {
   const Scene scene = testing::testScene(path);
   bool valid = true;
   RefinedSolve last;
@@ -148,6 +152,7 @@ void solveAsTheCli(benchmark::State& state, const std::string& path, double maxS
     SolverOptions options = solverOptionsFor(scene.solver);
     options.threads = 2;
     options.maxSeconds = maxSeconds;
+    if (method) options.method = *method;
     last = solveRefined(std::move(problem), options, RefinementOptions());
     valid = valid && last.valid;
   }
@@ -167,8 +172,13 @@ void BM_Ladder(benchmark::State& state, const std::string& name) { solveAsTheCli
 // How the cost grows with the clip and with the character (tests/scenes/scaling/): the shipped
 // jump repeated as 1, 2 and 3 consecutive hops (clips of 1.2, 2.4 and 3.6 s), and the same jump by
 // a lamp whose arms are split into more, shorter links (6, 9, 12 and 15 dofs, the same length and
-// mass). scripts/measure.sh fits the exponents of time against clip length and dofs.
+// mass). scripts/measure.sh fits the exponents of time against clip length and dofs. The
+// ScalingSqp rows solve the same scenes by `sqp`, whose step count grows more slowly with the
+// clip than the augmented Lagrangian's iterations.
 void BM_Scaling(benchmark::State& state, const std::string& name) { solveAsTheCli(state, "scaling/" + name, 300); }
+void BM_ScalingSqp(benchmark::State& state, const std::string& name) {
+  solveAsTheCli(state, "scaling/" + name, 300, SolverMethod::Sqp);
+}
 
 // One full residual + Jacobian evaluation of the jump; with `freeLiftOff`, the take-off's end is
 // a variable (its window's residuals rebuild their input maps from it at every evaluation).
@@ -316,6 +326,13 @@ BENCHMARK_CAPTURE(BM_Scaling, chain_6, std::string("luxo_chain_6.json"))->Unit(b
 BENCHMARK_CAPTURE(BM_Scaling, chain_9, std::string("luxo_chain_9.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Scaling, chain_12, std::string("luxo_chain_12.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_Scaling, chain_15, std::string("luxo_chain_15.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, hops_1, std::string("luxo_hops_1.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, hops_2, std::string("luxo_hops_2.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, hops_3, std::string("luxo_hops_3.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, chain_6, std::string("luxo_chain_6.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, chain_9, std::string("luxo_chain_9.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, chain_12, std::string("luxo_chain_12.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK_CAPTURE(BM_ScalingSqp, chain_15, std::string("luxo_chain_15.json"))->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, fixed_lift_off, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoJacobian, free_lift_off, true)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LuxoRawRows, 1_thread, 1)->Unit(benchmark::kMillisecond)->UseRealTime();
