@@ -3,7 +3,7 @@
 # the Release build: the solve and expression benchmarks (medians of 5 repetitions) and the jump
 # ladder through spacetime-cli (single runs: the rungs take seconds to tens of seconds). Prints
 # the tables in the documents' form. Takes about 12 minutes on the 2-core machine, plus the
-# scaling rows (single solves, about 10 minutes in all).
+# scaling rows (single solves, about 20 minutes for the two methods).
 #
 #   scripts/measure.sh            everything
 #   scripts/measure.sh benchmarks the benchmarks only
@@ -13,7 +13,8 @@
 #   scripts/measure.sh editor     the editor's own solves under Xvfb only (about 3 minutes)
 #   scripts/measure.sh speedlimits the jump under joint speed limits only (about 10 minutes)
 #   scripts/measure.sh motionstarts solves started from a motion.json alone only (about 2 minutes)
-#   scripts/measure.sh scaling    the scaling rows only, by the scene's method and by sqp
+#   scripts/measure.sh scaling    the scaling rows only, by the scene's method and by sqp (about
+#                                 20 minutes)
 #   scripts/measure.sh secondorder the second-order check of every shipped scene's optimum, and of
 #                                 each method's on the hurdle and the 0.3 m rung (about 3 minutes)
 set -euo pipefail
@@ -41,15 +42,15 @@ def steps(b):  # the method's own steps: the SQP's, or the augmented Lagrangian'
 def per_step(b):
     return b.get("sqp_ms_per_step", 0) if sqp else b.get("lm_ms_per_iteration", 0)
 kind = "SQP steps" if sqp else "LM iterations"
-print(f"| scene | clip | dofs | time | {kind} + Newton steps | ms per {kind[:-1]} | LM iterations after a hand-over | transcriptions | objective | valid |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+after = " LM iterations after a hand-over |" if sqp else ""  # sqp's hand-overs to al
+print(f"| scene | clip | dofs | time | {kind} + Newton steps | ms per {kind[:-1]} |{after} transcriptions | objective | valid |")
+print("|---" * (10 if sqp else 9) + "|")
 for b in rows:
     name = b["run_name"].split("/")[1]
     s = b["real_time"] / 1e3
-    first = steps(b)
-    after = f"{b['lm_iterations']:.0f}" if sqp else "-"
-    print(f"| {name} | {b['clip_seconds']:.1f} s | {b['dofs']:.0f} | {s:.3g} s | {first:.0f} + {b['newton_steps']:.0f} | "
-          f"{per_step(b):.2f} | {after} | {b['transcriptions']:.0f} | {b['objective']:.4f} | {'yes' if b['valid'] else 'no'} |")
+    lm = f" {b['lm_iterations']:.0f} |" if sqp else ""
+    print(f"| {name} | {b['clip_seconds']:.1f} s | {b['dofs']:.0f} | {s:.3g} s | {steps(b):.0f} + {b['newton_steps']:.0f} | "
+          f"{per_step(b):.2f} |{lm} {b['transcriptions']:.0f} | {b['objective']:.4f} | {'yes' if b['valid'] else 'no'} |")
 def slope(points):  # least-squares exponent of y = c x^a
     xs = [math.log(x) for x, _ in points]; ys = [math.log(y) for _, y in points]
     mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
