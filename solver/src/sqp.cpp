@@ -51,10 +51,11 @@ constexpr double kCreepingStep = 1.0 / 16;
 constexpr int kMaxCreepingSteps = 3;
 // Steps whose programs keep at least this share of the l1 violation in their elastic slacks,
 // this many in a row, hand over too: the linearised constraints cannot be met near the iterate
-// (a local infeasible point of the violation, which no step rule gets past). Of the scenes whose
-// steps converge no program kept more than 2 % but one of the power-formula scene's (0.92, once);
-// where the steps hand over later the share stays at 0.96-0.99 for ten steps and more (the 1.2 m
-// rung from its 17th step, the quadruped from its 13th), the steps creeping meanwhile.
+// (a local infeasible point of the violation, which no step rule gets past). On the scenes whose
+// steps converge no program kept more than 2 % (one program of the power-formula scene, whose
+// steps hand over by creeping, kept 0.92, once); where the steps hand over later the share stays
+// at 0.96-0.99 for ten steps and more (the 1.2 m rung from its 17th step, the quadruped from its
+// 13th), the steps creeping meanwhile.
 constexpr double kTrappedShare = 0.9;
 constexpr int kMaxTrappedSteps = 3;
 // Steps within the tolerance that stop approaching a KKT point hand over: this many in a row
