@@ -97,6 +97,33 @@ TEST(Sqp, TheDoubledHurdleAndTheShortRungConvergeByTheirOwnSteps) {
   }
 }
 
+// The augmented Lagrangian's polish fails near feasibility on the ladder's 0.9 m rung (a
+// Newton step does not lower the KKT residual at 70.49, violation 3.3e-5). Without the SQP's
+// damped steps from there the multiplier updates crawl along the constraints to the optimum
+// (1145 LM iterations); with them the solve ends at the same KKT point after ~420 - one way
+// to the optimum against the other.
+TEST(Sqp, DampedStepsFinishWhereTheAugmentedLagrangiansPolishFails) {
+  const Scene scene = testing::testScene("ladder/luxo_jump_0.9m.json");
+  SolverSummary withSteps, without;
+  for (bool steps : {true, false}) {
+    std::string error;
+    auto problem = SpacetimeProblem::build(scene, &error);
+    ASSERT_TRUE(problem) << error;
+    SolverOptions options;
+    options.threads = 2;
+    options.sqpAfterFailedPolish = steps;
+    const SolverSummary s = solveSpacetime(*problem, options);
+    ASSERT_TRUE(s.converged) << s.reason;
+    for (const ValidityCheck& c : validityChecklist(checkValidity(*problem)))
+      EXPECT_TRUE(c.pass) << c.name << ": " << c.value << " > " << c.limit;
+    (steps ? withSteps : without) = s;
+  }
+  EXPECT_GE(withSteps.sqpSteps, 1) << withSteps.reason;
+  EXPECT_EQ(without.sqpSteps, 0) << without.reason;
+  EXPECT_LT(withSteps.iterations, without.iterations / 2) << withSteps.reason;
+  EXPECT_NEAR(withSteps.objective, without.objective, 1e-6 * without.objective);
+}
+
 // The heavy lamp (its base twice as heavy): the SQP's own steps converge, without the augmented
 // Lagrangian, to the optimum `witkin-kass` and IPOPT reach (110.2928; IPOPT 110.293,
 // docs/validation.md), lower than the augmented Lagrangian's 110.8200. They handed over to it

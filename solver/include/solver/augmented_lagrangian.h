@@ -87,6 +87,11 @@ struct SolverOptions {
   // lamp's head touches down at the landing, and a 2 cm warm edit of the jump needed 17 steps.
   int maxPolishIterations = 40;
   int maxPolishAttempts = 2;  // the second after the violation dropped tenfold
+  // Where a polish attempt fails, the SQP's proximally damped steps from the same point and
+  // multipliers (sqpStepsNearFeasible, sqp.h) before the multiplier updates go on: the Newton
+  // steps need the point inside their basin, the SQP's line search does not (the 0.9 m rung:
+  // 420 LM iterations and 13 steps instead of 1145 LM iterations, to the same optimum).
+  bool sqpAfterFailedPolish = true;
   // Newton steps tried from a cold start before the augmented Lagrangian (0: none). A quadratic
   // program (the particle scenes) is solved by the first; a failed attempt restores the guess.
   int coldNewtonSteps = 1;

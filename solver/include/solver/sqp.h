@@ -30,4 +30,13 @@ namespace spacetime {
 SolverSummary solveSqp(SpacetimeProblem& problem, const SolverOptions& options,
                        const ProgressCallback& callback = nullptr, const std::atomic<bool>* cancel = nullptr);
 
+// The steps alone, warm from the problem's augmented-Lagrangian multipliers, for the augmented
+// Lagrangian where its Newton polish failed near feasibility (docs/design.md, Solver item 1):
+// the exact-Hessian programs damped proximally (delta times the shift metric on the Hessian,
+// grown after steps the line search cuts and shrunk after full ones). Converged, the problem
+// holds the KKT point; otherwise (status IterationLimit) its start is restored and the reason
+// says why the steps stopped. Not run with free contact ends.
+SolverSummary sqpStepsNearFeasible(SpacetimeProblem& problem, const SolverOptions& options,
+                                   const std::atomic<bool>* cancel = nullptr);
+
 }  // namespace spacetime
