@@ -493,20 +493,21 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       // objective may still have far to fall - the 0.9 m rung's 70.49 at a violation of 3.3e-5,
       // its optimum 65.649, which the updates at 1e6 then crawl to in 730 LM iterations, the
       // damped SQP steps in 13 (docs/design.md, Solver item 1).
-      SolverOptions stepOptions = options;
-      stepOptions.spentSeconds += budgetSecondsSince(start);
-      const SolverSummary steps =
-          options.sqpAfterFailedPolish ? sqpStepsNearFeasible(problem, stepOptions, cancel) : SolverSummary();
-      raw::addPhaseTo(steps, &summary);
-      if (steps.converged) {
-        m = measure(problem);
-        summary.status = SolveStatus::Converged;
-        summary.converged = true;
-        summary.polished = steps.polished;
-        std::ostringstream reason;
-        reason << steps.reason << ", from the augmented Lagrangian's iterate at a violation of " << lastPolishViolation;
-        summary.reason = reason.str();
-        break;
+      if (options.sqpAfterFailedPolish) {
+        SolverOptions stepOptions = options;
+        stepOptions.spentSeconds += budgetSecondsSince(start);
+        const SolverSummary steps = sqpStepsNearFeasible(problem, stepOptions, cancel);
+        raw::addPhaseTo(steps, &summary);
+        if (steps.converged) {
+          m = measure(problem);
+          summary.status = SolveStatus::Converged;
+          summary.converged = true;
+          summary.polished = steps.polished;
+          std::ostringstream reason;
+          reason << steps.reason << ", from the augmented Lagrangian's iterate at a violation of " << lastPolishViolation;
+          summary.reason = reason.str();
+          break;
+        }
       }
     }
     // First-order multiplier update (Nocedal & Wright eq. 17.39; 17.67 for inequalities).
