@@ -290,7 +290,8 @@ int run(int argc, char** argv) {
     for (const TranscriptionAttempt& a : solved.attempts)
       std::fprintf(stderr, "transcription %g control points/s%s, %d segments, s = %d%s: %s%s, objective %.9g, dense-grid residual %.3g of weight, %.3f s%s\n",
                    a.controlPointsPerSecond, a.nonUniform ? " split where the residual was large" : "", a.segments,
-                   a.samplesPerSegment, a.legBubbles ? ", leg bubbles" : "", toString(a.status).c_str(),
+                   a.samplesPerSegment, a.legBubbles ? ", leg bubbles" : "",
+                   a.tooCoarse ? "stopped early, too coarse" : toString(a.status).c_str(),
                    a.converged ? (a.valid ? ", valid" : ", not valid") : "", a.objective,
                    a.maxUnactuatedResidualDense, a.seconds, a.kept ? " (kept)" : "");
   std::optional<SecondOrderCheck> check;

@@ -36,6 +36,11 @@ bool atLeastAsGood(const TranscriptionAttempt& a, const TranscriptionAttempt& b)
 // Why the next transcription is tried: how this one's solve ended, or its first failing check.
 std::string describe(const TranscriptionAttempt& a, const std::vector<ValidityCheck>& checks) {
   std::ostringstream why;
+  if (a.tooCoarse) {
+    why << "the motion at " << describeResolution(a) << " left " << a.maxUnactuatedResidualDense
+        << " x the weight unexplained on the dense grid before its solve converged";
+    return why.str();
+  }
   if (!a.converged) {
     why << "the solve at " << describeResolution(a) << " stopped " << toString(a.status) << " (violation " << a.maxViolation
         << ")";
@@ -135,12 +140,15 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     if (level == 0 && refinement.refines() &&
         refineTranscription(spec, refinement, &next, RefinementOptions::kStallRateGrowth))
       levelOptions.interiorPointAfterStall = false;
+    if (refinement.enabled && level < refinement.maxRefinements)
+      levelOptions.coarseDenseResidual = RefinementOptions::kCoarseFactor * kDenseResidualLimit;
     if (starting) starting(*problem);
     const SolverSummary summary = solveSpacetime(*problem, levelOptions, callback, cancel);
     ValidityReport validity = checkValidity(*problem, 10, cancel);
     const std::vector<ValidityCheck> checks = validityChecklist(validity);
     attempt.status = summary.status;
     attempt.converged = summary.converged;
+    attempt.tooCoarse = summary.tooCoarse;
     attempt.valid = summary.converged && !validity.cancelled &&
                     std::all_of(checks.begin(), checks.end(), [](const ValidityCheck& c) { return c.pass; });
     attempt.objective = summary.objective;
@@ -188,16 +196,17 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     const ValidityReport& solvedValidity = problem ? validity : best.validity;
     TranscriptionSpec finer = spec;
     finer.legBubbles = true;
-    if (attempt.converged && !spec.legBubbles &&
+    const bool finished = attempt.converged || summary.tooCoarse;
+    if (finished && !spec.legBubbles &&
         refineWhereResidual(spec, solved.transcription().motion, solvedValidity, refinement, &finer)) {
       // Split where the dense grid failed; the rest keeps its resolution.
-    } else if (attempt.converged || spec.legBubbles || !solved.legBubblesWouldApply()) {
+    } else if (finished || spec.legBubbles || !solved.legBubblesWouldApply()) {
       // With leg bubbles the rate grows by half and s stays: s - 1 = 7 bubbles per interval at
       // s = 8 move unseen between the nodes (the planar quadruped's hop: 20/6 slips 0.36 mm
       // between them, 30/6 is valid, 60/8 leaves 0.24 x the weight unexplained).
       const bool legs = spec.legBubbles;
       if (!refineTranscription(spec, refinement, &finer,
-                               attempt.converged || legs ? RefinementOptions::kRateGrowth
+                               finished || legs ? RefinementOptions::kRateGrowth
                                                          : RefinementOptions::kStallRateGrowth))
         break;
       if (legs) finer.samplesPerSegment = spec.samplesPerSegment;
@@ -208,8 +217,10 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     std::string error;
     problem = SpacetimeProblem::build(scene, &error);
     if (!problem) break;  // a finer transcription of a scene that built: not expected
-    // The motion always transfers. After a converged solve the finer one starts warm (Newton
-    // steps first, then the penalty restarted at warmRestartPenalty); after a stalled one its
+    // The motion always transfers. After a converged solve, or one stopped as too coarse, the
+    // finer one starts warm (Newton steps first, then the penalty restarted at
+    // warmRestartPenalty; the 1.2 m rung stopped at a single scan: its 32 segments 11 s warm,
+    // 50 s started afresh); after a stalled one its
     // multipliers and penalty start afresh, as a cold solve's would: the stalled penalty only
     // holds the iterate where it stalled. Measured on the ladder's 0.9 / 1.2 / 1.5 m rungs before
     // every body was kept above the ground (the 1.5 m motion then put the lamp's head 4.3 cm
@@ -217,7 +228,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // solves too was faster on the first two (4.1 / 12.6 s) and left the 1.5 m rung stalled at 45
     // control points per second.
     const bool transferred = problem->initializeFrom(*best.problem) > 0;
-    options.warmStart = transferred && best.summary.converged;
+    options.warmStart = transferred && (best.summary.converged || best.summary.tooCoarse);
     // Where the augmented Lagrangian stalled and the interior point finished the solve, the
     // finer transcriptions go to the interior point at once: from the re-fitted motion the
     // augmented Lagrangian would stall again first.

@@ -148,29 +148,14 @@ ImpactCheck checkImpact(const SpacetimeProblem& problem, int j) {
 // The side of its instant a sample is read on (Sample::after: the flight's).
 Side sideOf(const Sample& s) { return s.after ? Side::After : Side::Contacts; }
 
-}  // namespace
-
-double sampleUnactuatedResidual(const SpacetimeProblem& problem, int c, const Sample& s) {
-  return unactuatedResidual(problem, c, s.time, groundForcesAt(problem, c, s.time, sideOf(s)), sideOf(s));
-}
-
-ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, const std::atomic<bool>* cancel) {
-  ValidityReport r;
-  auto stopped = [&] { return r.cancelled = r.cancelled || (cancel && cancel->load(std::memory_order_relaxed)); };
-  r.denseFactor = denseFactor;
-  const Scene& scene = problem.scene();
+// The unactuated residual at the samples and on the dense grid (ValidityReport's
+// maxUnactuatedResidual* and segmentResidualDense), with the ground forces from groundAt (cached
+// by the caller, whose contact checks read the same instants). False when stopped.
+template <class GroundAt, class Stopped>
+bool scanDenseResidual(const SpacetimeProblem& problem, const std::vector<double>& dense, GroundAt&& groundAt,
+                       Stopped&& stopped, ValidityReport& r) {
   const Transcription& tr = problem.transcription();
-  const std::vector<double> dense = tr.denseGrid(denseFactor);
-  r.minNormalForce = problem.contacts().empty() ? 0 : 1e300;
   r.segmentResidualDense.assign(static_cast<size_t>(tr.motion.segmentCount()), 0.0);
-  // Ground forces (an NNLS each) by character, time and side, solved once: the residual checks
-  // and the contact checks below read the same instants.
-  std::map<std::tuple<int, double, Side>, GroundForces> groundCache;
-  auto groundAt = [&](int c, double t, Side side = Side::Contacts) -> const GroundForces& {
-    auto [it, fresh] = groundCache.try_emplace({c, t, side});
-    if (fresh) it->second = groundForcesAt(problem, c, t, side);
-    return it->second;
-  };
   for (size_t c = 0; c < problem.characters().size(); ++c) {
     const int ci = static_cast<int>(c);
     for (const Sample& s : tr.samples)
@@ -194,7 +179,7 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, c
         }
     }
     for (double t : times) {
-      if (stopped()) return r;
+      if (stopped()) return false;
       const double v = unactuatedResidual(problem, ci, t, groundAt(ci, t));
       double& segment = r.segmentResidualDense[static_cast<size_t>(tr.motion.segmentOf(t))];
       segment = std::max(segment, v);
@@ -204,6 +189,40 @@ ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, c
       }
     }
   }
+  return true;
+}
+
+}  // namespace
+
+double sampleUnactuatedResidual(const SpacetimeProblem& problem, int c, const Sample& s) {
+  return unactuatedResidual(problem, c, s.time, groundForcesAt(problem, c, s.time, sideOf(s)), sideOf(s));
+}
+
+ValidityReport checkDenseResidual(const SpacetimeProblem& problem, int denseFactor) {
+  ValidityReport r;
+  r.denseFactor = denseFactor;
+  const auto groundAt = [&](int c, double t, Side side = Side::Contacts) { return groundForcesAt(problem, c, t, side); };
+  scanDenseResidual(problem, problem.transcription().denseGrid(denseFactor), groundAt, [] { return false; }, r);
+  return r;
+}
+
+ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor, const std::atomic<bool>* cancel) {
+  ValidityReport r;
+  auto stopped = [&] { return r.cancelled = r.cancelled || (cancel && cancel->load(std::memory_order_relaxed)); };
+  r.denseFactor = denseFactor;
+  const Scene& scene = problem.scene();
+  const Transcription& tr = problem.transcription();
+  const std::vector<double> dense = tr.denseGrid(denseFactor);
+  r.minNormalForce = problem.contacts().empty() ? 0 : 1e300;
+  // Ground forces (an NNLS each) by character, time and side, solved once: the residual checks
+  // and the contact checks below read the same instants.
+  std::map<std::tuple<int, double, Side>, GroundForces> groundCache;
+  auto groundAt = [&](int c, double t, Side side = Side::Contacts) -> const GroundForces& {
+    auto [it, fresh] = groundCache.try_emplace({c, t, side});
+    if (fresh) it->second = groundForcesAt(problem, c, t, side);
+    return it->second;
+  };
+  if (!scanDenseResidual(problem, dense, groundAt, stopped, r)) return r;
   for (const TermSpec& t : scene.terms) {
     if (stopped()) return r;
     if (!t.enabled) continue;

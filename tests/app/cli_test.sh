@@ -220,6 +220,7 @@ s = json.load(open(sys.argv[1]))
 r = s["refinement"]
 assert len(r) >= 2 and r[0]["samples_per_segment"] == 1 and not r[0]["valid"], r
 assert r[-1]["valid"] and r[-1]["kept"] and s["validity"]["valid"], r
+assert all(isinstance(a["too_coarse"], bool) and not (a["too_coarse"] and a["converged"]) for a in r), r
 assert s["transcription"]["samples_per_segment"] == r[-1]["samples_per_segment"] > 1, s["transcription"]
 PY
 # Resume: the time-limited jump above wrote its last iterate with the solver's state in

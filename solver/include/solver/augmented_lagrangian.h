@@ -115,6 +115,15 @@ struct SolverOptions {
   // SolverMethod::Sqp and WitkinKass: their steps before they hand over to the augmented
   // Lagrangian (the jump converges in 15-35; a long one that needs more is not converging).
   int sqpMaxSteps = 60;
+  // A transcription too coarse for the task: the augmented Lagrangian checks its motion on the
+  // dense grid (checkDenseResidual) the first time the violation is below coarseCheckBelow and
+  // each time it fell tenfold or five multiplier updates passed since, and stops (SolverSummary::tooCoarse) where two checks in a
+  // row leave more than coarseDenseResidual (fraction of the weight; 0: never) unexplained and
+  // the second more than half the first: a residual between the samples that does not fall with
+  // the violation, which finishing this solve would not make valid. solveRefined sets it where a
+  // finer transcription follows.
+  double coarseDenseResidual = 0;
+  double coarseCheckBelow = 1e-3;
 
   std::string validate() const;  // empty if valid, else what is wrong
   // The wall-clock instant a solve started at `start` must stop: maxSeconds less spentSeconds,
@@ -185,6 +194,9 @@ struct SolverSummary {
   int interiorPointIterations = 0;
   double interiorPointSeconds = 0;
   bool rescued = false;
+  // Stopped early at a motion the dense grid showed the transcription too coarse for
+  // (SolverOptions::coarseDenseResidual); status IterationLimit.
+  bool tooCoarse = false;
   double solveSeconds = 0;
   double jacobianSeconds = 0;   // Ceres's time in residual and Jacobian evaluation
   double linearSolverSeconds = 0;

@@ -52,6 +52,10 @@ struct RefinementOptions {
   // Segments whose dense-grid residual is above this fraction of the limit are split
   // (refineWhereResidual), while they are fewer than the uniform refinement would add.
   static constexpr double kSplitFraction = 0.5;
+  // Where a finer transcription follows, a solve stops once its motion, near the constraints,
+  // leaves more than this times the limit unexplained on the dense grid
+  // (SolverOptions::coarseDenseResidual).
+  static constexpr double kCoarseFactor = 10;
 
   // Whether any finer transcription may be tried at all.
   bool refines() const { return enabled && maxRefinements > 0; }
@@ -70,6 +74,9 @@ struct TranscriptionAttempt {
   std::string why;               // why this transcription was tried ("the scene's", or the failure)
   SolveStatus status = SolveStatus::InvalidOptions;
   bool converged = false;
+  // Stopped before converging at a motion the dense grid showed too coarse a transcription for
+  // (SolverSummary::tooCoarse): refined where its residual was, as a converged one would be.
+  bool tooCoarse = false;
   bool valid = false;            // every validity check passes
   double objective = 0;
   double maxViolation = 0;

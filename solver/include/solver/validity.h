@@ -104,6 +104,12 @@ struct ValidityReport {
 ValidityReport checkValidity(const SpacetimeProblem& problem, int denseFactor = kDenseGridFactor,
                              const std::atomic<bool>* cancel = nullptr);
 
+// Only the unactuated residual of checkValidity's report (maxUnactuatedResidualSamples,
+// maxUnactuatedResidualDense, worstDenseTime, segmentResidualDense), at a fraction of its cost:
+// what a solve reads to see a transcription too coarse for its task (SolverOptions::
+// coarseDenseResidual).
+ValidityReport checkDenseResidual(const SpacetimeProblem& problem, int denseFactor = kDenseGridFactor);
+
 // The largest unactuated generalized force of character c at sample s (fraction of weight), on
 // the side the problem imposes physics there: a flight's first instant (Sample::after) with the
 // flight interval's motion and without the contacts ending at s.time. Ground forces are the
