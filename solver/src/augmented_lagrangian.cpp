@@ -444,8 +444,9 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   double previousViolation = m.maxViolation;
   double stallReference = m.maxViolation;  // the violation when the current stall began
   int stalledUpdates = 0;
-  double lastCoarseCheck = std::numeric_limits<double>::infinity();  // violation and dense residual
-  double lastCoarseResidual = 0;                                       // at the last coarseness check
+  // The violation and the dense-grid residual at the last coarseness check.
+  double lastCoarseCheck = std::numeric_limits<double>::infinity();
+  double lastCoarseResidual = 0;
   int updatesSinceCoarseCheck = 0;
   for (int outer = 0; !polishedFirst && outer < options.maxOuterIterations; ++outer) {
     forwarder.outer = outer;
@@ -490,15 +491,12 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       summary.reason = "constraints within tolerance and the augmented Lagrangian stationary";
       break;
     }
-    // A transcription too coarse for the task: the residual between the samples stays large while
-    // the violation falls, or while it stays. Checked the first time the violation is below
-    // coarseCheckBelow and again each time it fell tenfold or kCoarseRecheckUpdates updates
-    // later (a few dense-grid scans a solve); the solve stops where two checks in a row exceed
-    // coarseDenseResidual and the second kept more than half the first. The ladder's 1.2 m rung
-    // at the scene's 24 segments: 2.97 x the weight unexplained at a violation of 2.7e-4, 1.87 at
-    // 2.6e-5 (0.58 where its solve ends, 1822 LM iterations later); on one thread its violation
-    // holds at 2e-5 after the first check (3.00 at 1.7e-4), and only the count brings the second.
-    // A single check is not enough: the planar quadruped's squat with leg bubbles leaves 0.32 at
+    // A transcription too coarse for the task (SolverOptions::coarseDenseResidual): a few
+    // dense-grid scans a solve. The ladder's 1.2 m rung at the scene's 24 segments: 2.97 x the
+    // weight unexplained at a violation of 2.7e-4, 1.87 at 2.6e-5 (0.58 where its solve ends,
+    // 1822 LM iterations later); on one thread its violation holds at 2e-5 after the first check
+    // (3.00 at 1.7e-4), and only the count of updates brings the second. A single check is not
+    // enough: the planar quadruped's squat with leg bubbles leaves 0.32 at
     // 5.3e-4, then 0.036 at 3.2e-5, and converges valid.
     ++updatesSinceCoarseCheck;
     if (options.coarseDenseResidual > 0 && m.maxViolation <= options.coarseCheckBelow &&

@@ -196,7 +196,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     const ValidityReport& solvedValidity = problem ? validity : best.validity;
     TranscriptionSpec finer = spec;
     finer.legBubbles = true;
-    const bool finished = attempt.converged || summary.tooCoarse;
+    const bool finished = attempt.converged || attempt.tooCoarse;
     if (finished && !spec.legBubbles &&
         refineWhereResidual(spec, solved.transcription().motion, solvedValidity, refinement, &finer)) {
       // Split where the dense grid failed; the rest keeps its resolution.
@@ -207,7 +207,7 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
       const bool legs = spec.legBubbles;
       if (!refineTranscription(spec, refinement, &finer,
                                finished || legs ? RefinementOptions::kRateGrowth
-                                                         : RefinementOptions::kStallRateGrowth))
+                                                : RefinementOptions::kStallRateGrowth))
         break;
       if (legs) finer.samplesPerSegment = spec.samplesPerSegment;
     }
@@ -220,9 +220,8 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // The motion always transfers. After a converged solve, or one stopped as too coarse, the
     // finer one starts warm (Newton steps first, then the penalty restarted at
     // warmRestartPenalty; the 1.2 m rung stopped at a single scan: its 32 segments 11 s warm,
-    // 50 s started afresh); after a stalled one its
-    // multipliers and penalty start afresh, as a cold solve's would: the stalled penalty only
-    // holds the iterate where it stalled. Measured on the ladder's 0.9 / 1.2 / 1.5 m rungs before
+    // 50 s started afresh); after a stalled one its multipliers and penalty start afresh, as a
+    // cold solve's would: the stalled penalty only holds the iterate where it stalled. Measured on the ladder's 0.9 / 1.2 / 1.5 m rungs before
     // every body was kept above the ground (the 1.5 m motion then put the lamp's head 4.3 cm
     // under the floor): every rung valid this way (15 / 34 / 33 s); restarting after converged
     // solves too was faster on the first two (4.1 / 12.6 s) and left the 1.5 m rung stalled at 45

@@ -117,11 +117,11 @@ struct SolverOptions {
   int sqpMaxSteps = 60;
   // A transcription too coarse for the task: the augmented Lagrangian checks its motion on the
   // dense grid (checkDenseResidual) the first time the violation is below coarseCheckBelow and
-  // each time it fell tenfold or five multiplier updates passed since, and stops (SolverSummary::tooCoarse) where two checks in a
-  // row leave more than coarseDenseResidual (fraction of the weight; 0: never) unexplained and
-  // the second more than half the first: a residual between the samples that does not fall with
-  // the violation, which finishing this solve would not make valid. solveRefined sets it where a
-  // finer transcription follows.
+  // each time it fell tenfold or five multiplier updates passed since, and stops
+  // (SolverSummary::tooCoarse) where two checks in a row leave more than coarseDenseResidual
+  // (fraction of the weight; 0: never) unexplained and the second more than half the first: a
+  // residual between the samples that does not fall with the violation, which finishing this
+  // solve would not make valid. solveRefined sets it where a finer transcription follows.
   double coarseDenseResidual = 0;
   double coarseCheckBelow = 1e-3;
 
