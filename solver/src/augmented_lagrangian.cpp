@@ -24,6 +24,10 @@ namespace {
 // Multiplier updates after which a coarseness check is repeated though the violation has not
 // fallen tenfold (SolverOptions::coarseDenseResidual).
 constexpr int kCoarseRecheckUpdates = 5;
+// The warm start's SQP steps (SolverOptions::warmSqpSteps) stop after this many programs in a
+// row needed a large shift (SolverOptions::sqpShiftedStepsLimit): the shipped jump at s = 3,
+// split after its converged solve, then stops them at its third program instead of taking 20.
+constexpr int kWarmShiftedStepsLimit = 3;
 
 using Clock = std::chrono::steady_clock;
 
@@ -120,6 +124,7 @@ std::string SolverOptions::validate() const {
   if (!(polishBelow > 0)) return "polishBelow must be > 0";
   if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
   if (sqpMaxSteps < 1) return "sqpMaxSteps must be at least 1";
+  if (warmSqpSteps < 0) return "warmSqpSteps must not be negative";
   if (!(coarseDenseResidual >= 0) || !(coarseCheckBelow > 0))
     return "coarseDenseResidual must be >= 0 and coarseCheckBelow > 0";
   if (coldNewtonSteps < 0) return "coldNewtonSteps must not be negative";
@@ -404,6 +409,24 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
                      std::to_string(summary.newtonSteps) + " Newton steps with the exact Hessian";
     return true;
   };
+  // The SQP's damped steps from the current point and multipliers (sqpStepsNearFeasible, at most
+  // maxSteps); true if they reached a KKT point, which ends the solve (its reason then ends
+  // with `from`). Where they stop, the point they started from is restored.
+  auto sqpSteps = [&](int maxSteps, int shiftedStepsLimit, const std::string& from) {
+    SolverOptions stepOptions = options;
+    stepOptions.sqpMaxSteps = maxSteps;
+    stepOptions.sqpShiftedStepsLimit = shiftedStepsLimit;
+    stepOptions.spentSeconds += budgetSecondsSince(start);
+    const SolverSummary steps = sqpStepsNearFeasible(problem, stepOptions, cancel);
+    raw::addPhaseTo(steps, &summary);
+    if (!steps.converged) return false;
+    m = measure(problem);
+    summary.status = SolveStatus::Converged;
+    summary.converged = true;
+    summary.polished = steps.polished;
+    summary.reason = steps.reason + from;
+    return true;
+  };
   auto holdFreeEnds = [&](bool hold) {
     for (const FreeEnd& e : problem.freeEnds()) {
       double* T = problem.variables().data() + e.offset;
@@ -433,8 +456,13 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
   // one rejected step).
   const bool polishedCold = options.newtonPolish && !options.warmStart && !freeEndsHeld &&
                             options.coldNewtonSteps > 0 && polish(options.coldNewtonSteps);
-  const bool polishedFirst = polishedWarm || polishedCold;
   if (measureLater && !polishedWarm) m = measure(problem);  // a failed polish restored the start
+  // A warm start the Newton steps could not finish: the damped SQP steps from the same start
+  // (SolverOptions::warmSqpSteps) before the multiplier updates.
+  const bool steppedWarm =
+      options.warmStart && !polishedWarm && options.warmSqpSteps > 0 && problem.freeEnds().empty() &&
+      sqpSteps(options.warmSqpSteps, kWarmShiftedStepsLimit, ", warm from the starting motion");
+  const bool polishedFirst = polishedWarm || polishedCold || steppedWarm;
   // A warm start far from feasible (a large edit the Newton steps could not finish) keeps its
   // multipliers but restarts the penalty (at warmRestartPenalty): the old one was grown for a
   // violation near zero, and at 1e7 the inner problems are stiff (luxo_jump, end pose moved 10 cm:
@@ -532,20 +560,9 @@ SolverSummary solveSpacetime(SpacetimeProblem& problem, const SolverOptions& opt
       // its optimum 65.649, which the updates at 1e6 then crawl to in 730 LM iterations, the
       // damped SQP steps in 13 (docs/design.md, Solver item 1).
       if (options.sqpAfterFailedPolish) {
-        SolverOptions stepOptions = options;
-        stepOptions.spentSeconds += budgetSecondsSince(start);
-        const SolverSummary steps = sqpStepsNearFeasible(problem, stepOptions, cancel);
-        raw::addPhaseTo(steps, &summary);
-        if (steps.converged) {
-          m = measure(problem);
-          summary.status = SolveStatus::Converged;
-          summary.converged = true;
-          summary.polished = steps.polished;
-          std::ostringstream reason;
-          reason << steps.reason << ", from the augmented Lagrangian's iterate at a violation of " << lastPolishViolation;
-          summary.reason = reason.str();
-          break;
-        }
+        std::ostringstream from;
+        from << ", from the augmented Lagrangian's iterate at a violation of " << lastPolishViolation;
+        if (sqpSteps(options.sqpMaxSteps, options.sqpShiftedStepsLimit, from.str())) break;
       }
     }
     // First-order multiplier update (Nocedal & Wright eq. 17.39; 17.67 for inequalities).

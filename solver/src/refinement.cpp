@@ -228,6 +228,12 @@ RefinedSolve solveRefined(std::unique_ptr<SpacetimeProblem> problem, SolverOptio
     // control points per second.
     const bool transferred = problem->initializeFrom(*best.problem) > 0;
     options.warmStart = transferred && (best.summary.converged || best.summary.tooCoarse);
+    // From a converged motion the re-fitted one misses mostly the rows the split added, which
+    // the SQP's exact-Hessian steps meet in a few (docs/design.md, Solver item 3); from one
+    // stopped as too coarse, the motion is still far from this transcription's optimum.
+    options.warmSqpSteps = options.warmStart && best.summary.converged && options.method == SolverMethod::AugmentedLagrangian
+                               ? refinement.warmSqpSteps
+                               : 0;
     // Where the augmented Lagrangian stalled and the interior point finished the solve, the
     // finer transcriptions go to the interior point at once: from the re-fitted motion the
     // augmented Lagrangian would stall again first.

@@ -56,6 +56,14 @@ constexpr int kMaxCreepingSteps = 3;
 // steps hand over by creeping, kept 0.92, once); where the steps hand over later the share stays
 // at 0.96-0.99 for ten steps and more (the 1.2 m rung from its 17th step, the quadruped from its
 // 13th), the steps creeping meanwhile.
+// Warm steps whose programs each needed the inertia correction's shift at kLargeShift or more
+// (the shift metric's units), SolverOptions::sqpShiftedStepsLimit in a row, stop: such a program's
+// step is a damped gradient step, and they converge linearly. The shipped jump at s = 3, split
+// after its converged solve: 17 full steps each at a shift of 0.81, ½|r|² 13.90 -> 12.34 where
+// its optimum is 11.69; where such steps converged their shift fell below 0.07 by the second
+// step (the 1.2 m rung's split transcription 0.66, then 0.0066) or a cut step's proximal
+// damping took its place.
+constexpr double kLargeShift = 0.1;
 constexpr double kTrappedShare = 0.9;
 constexpr int kMaxTrappedSteps = 3;
 // Steps within the tolerance that stop approaching a KKT point hand over: this many in a row
@@ -226,6 +234,7 @@ SolverSummary runSqp(SpacetimeProblem& problem, const SolverOptions& options, co
   int creepingSteps = 0;      // in a row
   double proximal = 0;        // the damping delta (kProximalStart), near feasibility only
   int trappedSteps = 0;       // in a row
+  int shiftedSteps = 0;       // in a row: programs that needed a shift of kLargeShift or more
   RawRows rows;
   if (!evaluator.evaluate(&rows, true)) why = "the rows at the starting point are not finite";
   for (int step = 0; why.empty() && !done; ++step) {
@@ -433,6 +442,15 @@ SolverSummary runSqp(SpacetimeProblem& problem, const SolverOptions& options, co
       }
     } else {
       trappedSteps = 0;
+    }
+    if (options.sqpShiftedStepsLimit > 0 && qp.shift >= kLargeShift && proximal == 0) {
+      if (++shiftedSteps == options.sqpShiftedStepsLimit) {
+        why = std::to_string(shiftedSteps) + " programs in a row needed the Hessian shifted by " + toShortString(kLargeShift) +
+              " or more";
+        break;
+      }
+    } else {
+      shiftedSteps = 0;
     }
     const Vec d = qp.x.head(n);
     Vec yNew = Vec::Zero(rowCount);

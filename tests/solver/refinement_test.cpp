@@ -145,6 +145,21 @@ TEST(Refinement, TheLongerJumpBecomesValidOnAFinerTranscription) {
   // what its transcription could not resolve.
   EXPECT_LT(refined.summary.objective, coarse.summary.objective);
   EXPECT_LT(refined.summary.objective, 136.8);  // the uniform refinement's optimum (30 per second, s = 8)
+
+  // The last transcription follows a converged one: its re-fitted motion misses mostly the rows
+  // the split added, and the SQP's damped exact-Hessian steps (RefinementOptions::warmSqpSteps)
+  // finish it without a multiplier update, at the optimum the augmented Lagrangian's updates
+  // reach from the same start.
+  ASSERT_TRUE(refined.attempts[refined.attempts.size() - 2].converged);
+  EXPECT_EQ(kept.iterations, 0);
+  EXPECT_NE(refined.summary.reason.find("warm from the starting motion"), std::string::npos) << refined.summary.reason;
+  RefinementOptions withoutSteps;
+  withoutSteps.warmSqpSteps = 0;
+  const RefinedSolve updated = solveRefined(built(scene), options, withoutSteps);
+  ASSERT_TRUE(updated.valid) << updated.summary.reason;
+  ASSERT_EQ(updated.attempts.size(), refined.attempts.size());
+  EXPECT_GT(updated.attempts.back().iterations, 0);
+  EXPECT_NEAR(refined.summary.objective, updated.summary.objective, 1e-6 * updated.summary.objective);
 }
 
 // The ladder's 1.5 m rung from the default guess, as `spacetime-cli solve` runs it: at the

@@ -92,6 +92,16 @@ struct SolverOptions {
   // steps need the point inside their basin, the SQP's line search does not (the 0.9 m rung:
   // 420 LM iterations and 13 steps instead of 1145 LM iterations, to the same optimum).
   bool sqpAfterFailedPolish = true;
+  // A warm start whose Newton polish fails takes up to this many of the same damped SQP steps
+  // from its start before the multiplier updates (0: none); where they stop, the start is
+  // restored. solveRefined sets it on the transcription after a converged one, whose re-fitted
+  // motion misses only the rows the split added (the 1.2 m rung's 35 segments: 0 LM iterations
+  // and 6 steps, 0.7-0.9 s, instead of 300 LM iterations, 3.4 s; docs/design.md, Solver item 3).
+  int warmSqpSteps = 0;
+  // SQP steps stop after this many in a row whose programs needed the Hessian shifted by 0.1 or
+  // more (0, the default: never; sqp.cpp, kLargeShift): they converge linearly. The warm-start
+  // steps above use 3 (augmented_lagrangian.cpp, kWarmShiftedStepsLimit).
+  int sqpShiftedStepsLimit = 0;
   // Newton steps tried from a cold start before the augmented Lagrangian (0: none). A quadratic
   // program (the particle scenes) is solved by the first; a failed attempt restores the guess.
   int coldNewtonSteps = 1;

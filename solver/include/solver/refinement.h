@@ -56,6 +56,10 @@ struct RefinementOptions {
   // leaves more than this times the limit unexplained on the dense grid
   // (SolverOptions::coarseDenseResidual).
   static constexpr double kCoarseFactor = 10;
+  // After a converged solve, the finer transcription's augmented Lagrangian first takes up to
+  // this many damped SQP steps where its warm Newton polish fails (SolverOptions::warmSqpSteps;
+  // 0: none; the 1.2 m rung's last transcription takes 6).
+  int warmSqpSteps = 20;
 
   // Whether any finer transcription may be tried at all.
   bool refines() const { return enabled && maxRefinements > 0; }
