@@ -56,6 +56,8 @@ constexpr int kMaxCreepingSteps = 3;
 // steps hand over by creeping, kept 0.92, once); where the steps hand over later the share stays
 // at 0.96-0.99 for ten steps and more (the 1.2 m rung from its 17th step, the quadruped from its
 // 13th), the steps creeping meanwhile.
+constexpr double kTrappedShare = 0.9;
+constexpr int kMaxTrappedSteps = 3;
 // Warm steps whose programs each needed the inertia correction's shift at kLargeShift or more
 // (the shift metric's units), SolverOptions::sqpShiftedStepsLimit in a row, stop: such a program's
 // step is a damped gradient step, and they converge linearly. The shipped jump at s = 3, split
@@ -64,8 +66,6 @@ constexpr int kMaxCreepingSteps = 3;
 // step (the 1.2 m rung's split transcription 0.66, then 0.0066) or a cut step's proximal
 // damping took its place.
 constexpr double kLargeShift = 0.1;
-constexpr double kTrappedShare = 0.9;
-constexpr int kMaxTrappedSteps = 3;
 // Steps within the tolerance that stop approaching a KKT point hand over: this many in a row
 // whose stationarity fell by less than this factor. The power-formula scene's exact-Hessian
 // programs need a shift of ~190 (its objective is not convex) and its feasible steps then lowered
