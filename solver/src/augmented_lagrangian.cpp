@@ -125,6 +125,7 @@ std::string SolverOptions::validate() const {
   if (maxPolishIterations < 1) return "maxPolishIterations must be at least 1";
   if (sqpMaxSteps < 1) return "sqpMaxSteps must be at least 1";
   if (warmSqpSteps < 0) return "warmSqpSteps must not be negative";
+  if (sqpShiftedStepsLimit < 0) return "sqpShiftedStepsLimit must not be negative";
   if (!(coarseDenseResidual >= 0) || !(coarseCheckBelow > 0))
     return "coarseDenseResidual must be >= 0 and coarseCheckBelow > 0";
   if (coldNewtonSteps < 0) return "coldNewtonSteps must not be negative";
